@@ -1,0 +1,1 @@
+"""Scenario replay for Speech Event: load scenario files, play them to the node, report."""

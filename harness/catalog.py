@@ -1,0 +1,35 @@
+"""The voices that speak a scenario's text and the recognizers that can transcribe it, by name."""
+
+import re
+from dataclasses import dataclass
+from typing import Callable, Dict, Optional
+
+import numpy as np
+
+from fixtures.audio import speak_tones
+from speech_event.ports import Recognizer
+from speech_event.recognizers.tones import ToneRecognizer
+
+
+@dataclass(frozen=True)
+class Voice:
+    # Turns text into mono float32 audio at the given sample rate.
+    speak: Callable[[str, int], np.ndarray]
+    # The characters it can speak, as a regular-expression class; None for any text.
+    alphabet: Optional[str] = None
+
+    def problem_with(self, text: str) -> Optional[str]:
+        """Why this voice cannot speak ``text``, or None."""
+        if self.alphabet is None:
+            return None
+        bad = sorted(set(re.sub(self.alphabet, "", text)))
+        if bad:
+            return "cannot speak {}; it speaks only {}".format(
+                ", ".join(repr(character) for character in bad), self.alphabet
+            )
+        return None
+
+
+VOICES: Dict[str, Voice] = {"tones": Voice(speak_tones, "[a-z' ]")}
+
+RECOGNIZERS: Dict[str, Callable[[], Recognizer]] = {"fake": ToneRecognizer}

@@ -1,0 +1,68 @@
+"""Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic."""
+
+from dataclasses import dataclass
+from typing import List
+
+from harness.catalog import RECOGNIZERS
+from harness.scenario import Scenario
+from harness.timeline import ComeUp, GoDown, Publish, build_timeline
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.adapters.executors import ClockExecutor
+from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.messages import Float32MultiArray, String, message_type_name
+from speech_event.node import SpeechEventNode
+
+SOUND_DETECTION = "soundDetection"
+
+
+@dataclass(frozen=True)
+class Published:
+    time: float
+    text: str
+
+
+def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[Published]:
+    """Every message the node published on /speechEvent/text, with its scenario time.
+
+    ``recognition_seconds`` is how much scenario time each recognition takes.
+    """
+    timeline = build_timeline(scenario)
+    clock = FakeClock()
+    bus = InMemoryBus()
+    published: List[Published] = []
+    bus.subscribe(
+        TEXT_TOPIC,
+        String,
+        lambda message: published.append(
+            Published(clock.now(), message.data)  # type: ignore[attr-defined]
+        ),
+    )
+    node = SpeechEventNode(
+        scenario.config,
+        bus,
+        clock,
+        RECOGNIZERS[scenario.recognizer](),
+        ClockExecutor(clock, recognition_seconds),
+    )
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
+    node.start()
+    for event in timeline.events:
+        clock.advance_to(event.time)
+        if isinstance(event, Publish):
+            if message_type_name(event.message) == Float32MultiArray._type:
+                sound_detection.publish(event.message)
+            else:  # another node, publishing another type on the same topic
+                intruder = bus.advertise(SIGNAL_TOPIC, type(event.message), node="wrongTypePublisher")
+                intruder.publish(event.message)
+                intruder.shutdown()
+        elif isinstance(event, GoDown):
+            if event.kind == "crash":
+                sound_detection.crash()
+            else:
+                sound_detection.shutdown()
+        elif isinstance(event, ComeUp):
+            sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
+    clock.advance_to(timeline.end)
+    node.stop()
+    return published

@@ -1,0 +1,198 @@
+"""Scenario files: what soundDetection does over time, and the exact text the node must publish.
+
+The format is a contract shared with scenarios written elsewhere (see README.md). A file that does
+not follow it gets a ``ScenarioError`` naming the file, the place in it and what is allowed.
+"""
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, Mapping, Optional, Tuple, Union
+
+from harness.catalog import RECOGNIZERS, VOICES
+from speech_event.config import ConfigError, SpeechEventConfig, apply_overrides
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - the robot's Python
+    import tomli as tomllib
+
+MALFORMED_KINDS = ("empty", "nan", "inf", "out_of_range", "multichannel", "oversized", "wrong_type")
+OUTAGE_KINDS = ("shutdown", "crash")
+DEFAULT_NOISE_DB = -40.0
+
+
+class ScenarioError(Exception):
+    """A scenario file that does not follow the format."""
+
+
+@dataclass(frozen=True)
+class Say:
+    text: str
+
+
+@dataclass(frozen=True)
+class Silence:
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Noise:
+    seconds: float
+    level_db: float = DEFAULT_NOISE_DB
+
+
+@dataclass(frozen=True)
+class Malformed:
+    kind: str
+
+
+@dataclass(frozen=True)
+class Outage:
+    seconds: float
+    kind: str = "shutdown"
+
+
+Step = Union[Say, Silence, Noise, Malformed, Outage]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    source: str
+    config: SpeechEventConfig
+    steps: Tuple[Step, ...]
+    expected: Tuple[str, ...]
+    voice: str = "tones"
+    recognizer: str = "fake"
+    background_noise_db: Optional[float] = None
+    # Seeds every random draw (noise), so a scenario gives the same audio on every run.
+    seed: int = 0
+
+
+_TOP_KEYS = (
+    "name",
+    "voice",
+    "recognizer",
+    "background_noise_db",
+    "seed",
+    "config",
+    "steps",
+    "expect",
+)
+_STEP_KEYS = {
+    "say": ("say",),
+    "silence": ("silence",),
+    "noise": ("noise", "level_db"),
+    "malformed": ("malformed",),
+    "outage": ("outage", "kind"),
+}
+
+
+_REQUIRED = object()
+
+
+class _Reader:
+    """Typed access to one table of the file, with errors that say where."""
+
+    def __init__(self, table: Mapping[str, Any], where: str, allowed: Tuple[str, ...]) -> None:
+        unknown = sorted(set(table) - set(allowed))
+        if unknown:
+            raise ScenarioError(
+                "{}: unknown key '{}'; allowed keys: {}".format(where, unknown[0], ", ".join(allowed))
+            )
+        self._table = table
+        self._where = where
+
+    def get(self, key: str, kind: Union[type, Tuple[type, ...]], default: Any = _REQUIRED) -> Any:
+        if key not in self._table:
+            if default is _REQUIRED:
+                raise ScenarioError(f"{self._where}: '{key}' is required")
+            return default
+        value = self._table[key]
+        if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+            names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+            raise ScenarioError(f"{self._where}: '{key}' = {value!r} must be of type {names}")
+        return value
+
+    def seconds(self, key: str) -> float:
+        value = float(self.get(key, (int, float)))
+        if not 0 < value <= 3600:
+            raise ScenarioError(
+                f"{self._where}: '{key}' = {value} must be a number of seconds above 0 and at most 3600"
+            )
+        return value
+
+    def choice(self, key: str, options: Tuple[str, ...], default: Any = _REQUIRED) -> str:
+        value = str(self.get(key, str, default))
+        if value not in options:
+            raise ScenarioError(
+                "{}: '{}' = {!r} is not allowed; allowed: {}".format(
+                    self._where, key, value, ", ".join(options)
+                )
+            )
+        return value
+
+
+def _step(table: Any, where: str) -> Step:
+    if not isinstance(table, dict):
+        raise ScenarioError(f'{where}: a step must be a table such as {{ say = "hello" }}')
+    kinds = [kind for kind in _STEP_KEYS if kind in table]
+    if len(kinds) != 1:
+        raise ScenarioError(
+            "{}: a step needs exactly one of {}; it has {}".format(
+                where, ", ".join(_STEP_KEYS), ", ".join(sorted(table)) or "none"
+            )
+        )
+    kind = kinds[0]
+    reader = _Reader(table, where, _STEP_KEYS[kind])
+    if kind == "say":
+        return Say(reader.get("say", str))
+    if kind == "silence":
+        return Silence(reader.seconds("silence"))
+    if kind == "noise":
+        return Noise(reader.seconds("noise"), float(reader.get("level_db", (int, float), DEFAULT_NOISE_DB)))
+    if kind == "malformed":
+        return Malformed(reader.choice("malformed", MALFORMED_KINDS))
+    return Outage(reader.seconds("outage"), reader.choice("kind", OUTAGE_KINDS, "shutdown"))
+
+
+def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEventConfig) -> Scenario:
+    top = _Reader(document, source, _TOP_KEYS)
+    try:
+        config = apply_overrides(base_config, top.get("config", dict, {}), source + ": [config]")
+    except ConfigError as config_error:
+        raise ScenarioError(str(config_error)) from None
+    steps_table = top.get("steps", list)
+    steps = tuple(_step(table, f"{source}: steps[{number}]") for number, table in enumerate(steps_table))
+    expect = _Reader(top.get("expect", dict), source + ": [expect]", ("published",))
+    published = expect.get("published", list)
+    if not all(isinstance(text, str) for text in published):
+        raise ScenarioError(f"{source}: [expect]: 'published' must be a list of strings")
+    voice = top.choice("voice", tuple(VOICES), "tones")
+    for number, step in enumerate(steps):
+        problem = VOICES[voice].problem_with(step.text) if isinstance(step, Say) else None
+        if problem:
+            raise ScenarioError(f"{source}: steps[{number}]: the {voice} voice {problem}")
+    noise_db = top.get("background_noise_db", (int, float), None)
+    return Scenario(
+        name=top.get("name", str),
+        source=source,
+        config=config,
+        steps=steps,
+        expected=tuple(published),
+        voice=voice,
+        recognizer=top.choice("recognizer", tuple(RECOGNIZERS), "fake"),
+        background_noise_db=None if noise_db is None else float(noise_db),
+        seed=int(top.get("seed", int, 0)),
+    )
+
+
+def load_scenario(path: Union[str, Path], base_config: SpeechEventConfig) -> Scenario:
+    try:
+        document = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as problem:
+        raise ScenarioError(f"{path}: cannot read the scenario: {problem.strerror}") from None
+    except tomllib.TOMLDecodeError as problem:
+        raise ScenarioError(f"{path}: not valid TOML: {problem}") from None
+    return parse_scenario(document, str(path), base_config)

@@ -1,0 +1,89 @@
+"""Turns a scenario's steps into what soundDetection does, and when, on the scenario clock.
+
+Both transports play the same timeline, so a scenario means the same thing in memory and on ROS.
+soundDetection publishes 4096-sample blocks, each when it has been recorded (paced in real time);
+it is up at t = 0 and stays up and silent after the last step until the node's pause has passed.
+"""
+
+from dataclasses import dataclass
+from typing import List, Union
+
+import numpy as np
+
+from fixtures.audio import noise
+from fixtures.malformed import BLOCK_SAMPLES, malformed_message
+from harness.catalog import VOICES
+from harness.scenario import Malformed, Noise, Outage, Say, Scenario, Silence
+from speech_event.messages import Float32MultiArray
+
+# After the last step the clock runs on for the pause period plus this, so the last utterance closes.
+SETTLE_SECONDS = 0.5
+
+
+@dataclass(frozen=True)
+class Publish:
+    time: float
+    message: object
+
+
+@dataclass(frozen=True)
+class GoDown:
+    time: float
+    kind: str  # "shutdown" or "crash"
+
+
+@dataclass(frozen=True)
+class ComeUp:
+    time: float
+
+
+Event = Union[Publish, GoDown, ComeUp]
+
+
+@dataclass(frozen=True)
+class Timeline:
+    events: List[Event]
+    end: float
+
+
+def _blocks(audio: np.ndarray, start: float, sample_rate: int) -> List[Publish]:
+    count = -(-audio.size // BLOCK_SAMPLES)
+    padded = np.zeros(count * BLOCK_SAMPLES, dtype=np.float32)
+    padded[: audio.size] = audio
+    block_seconds = BLOCK_SAMPLES / sample_rate
+    return [
+        Publish(start + (index + 1) * block_seconds, Float32MultiArray(data=block))
+        for index, block in enumerate(padded.reshape(count, BLOCK_SAMPLES))
+    ]
+
+
+def build_timeline(scenario: Scenario) -> Timeline:
+    config = scenario.config
+    rate = config.sample_rate
+    rng = np.random.default_rng(scenario.seed)
+    voice = VOICES[scenario.voice]
+    events: List[Event] = []
+    time = 0.0
+    for step in scenario.steps:
+        if isinstance(step, (Say, Noise)):
+            if isinstance(step, Say):
+                audio = voice.speak(step.text, rate)
+            else:
+                audio = noise(round(step.seconds * rate), step.level_db, rng)
+            blocks = _blocks(audio, time, rate)
+            if scenario.background_noise_db is not None:
+                for block in blocks:
+                    data = block.message.data  # type: ignore[attr-defined]
+                    data += noise(data.size, scenario.background_noise_db, rng)
+                    np.clip(data, -1.0, 1.0, out=data)
+            events.extend(blocks)
+            time += len(blocks) * BLOCK_SAMPLES / rate
+        elif isinstance(step, Silence):
+            time += step.seconds
+        elif isinstance(step, Malformed):
+            events.append(Publish(time, malformed_message(step.kind, rate, config.max_message_length, rng)))
+        elif isinstance(step, Outage):
+            events.append(GoDown(time, step.kind))
+            time += step.seconds
+            events.append(ComeUp(time))
+    return Timeline(events, time + config.speech_pause_period + SETTLE_SECONDS)

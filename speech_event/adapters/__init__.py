@@ -1,0 +1,1 @@
+"""Adapters that plug into the node's ports."""

@@ -1,0 +1,43 @@
+"""A clock that moves only when told to: timers fire in time order, ties in the order they were set."""
+
+import heapq
+from typing import Callable, List, Tuple
+
+
+class FakeTimer:
+    def __init__(self, callback: Callable[[], None]) -> None:
+        self.callback = callback
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+class FakeClock:
+    def __init__(self, start: float = 0.0) -> None:
+        self._now = start
+        self._sequence = 0
+        self._queue: List[Tuple[float, int, FakeTimer]] = []
+
+    def now(self) -> float:
+        return self._now
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> FakeTimer:
+        timer = FakeTimer(callback)
+        heapq.heappush(self._queue, (max(when, self._now), self._sequence, timer))
+        self._sequence += 1
+        return timer
+
+    def advance_to(self, when: float) -> None:
+        """Move to ``when``, firing every timer due by then, also those set while firing."""
+        if when < self._now:
+            raise ValueError(f"the clock cannot go back from {self._now} to {when}")
+        while self._queue and self._queue[0][0] <= when:
+            due, _, timer = heapq.heappop(self._queue)
+            self._now = due
+            if not timer.cancelled:
+                timer.callback()
+        self._now = when
+
+    def advance(self, seconds: float) -> None:
+        self.advance_to(self._now + seconds)

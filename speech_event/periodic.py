@@ -1,0 +1,30 @@
+"""A callback run at start + P, start + 2P, ... on any Clock, without drift."""
+
+from typing import Callable, Optional
+
+from speech_event.ports import Clock, Timer
+
+
+class Periodic:
+    def __init__(self, clock: Clock, period: float, callback: Callable[[], None]) -> None:
+        self._clock = clock
+        self._period = period
+        self._callback = callback
+        self._start = clock.now()
+        self._count = 0
+        self._timer: Optional[Timer] = None
+        self._schedule_next()
+
+    def cancel(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _schedule_next(self) -> None:
+        # Each time is computed from the start, so timer latency never accumulates.
+        self._timer = self._clock.call_at(self._start + (self._count + 1) * self._period, self._fire)
+
+    def _fire(self) -> None:
+        self._count += 1
+        self._schedule_next()
+        self._callback()

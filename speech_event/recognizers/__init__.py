@@ -1,0 +1,1 @@
+"""Recognizers: adapters of the Recognizer port."""
