@@ -38,13 +38,8 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[
             Published(clock.now(), message.data)  # type: ignore[attr-defined]
         ),
     )
-    node = SpeechEventNode(
-        scenario.config,
-        bus,
-        clock,
-        RECOGNIZERS[scenario.recognizer](),
-        ClockExecutor(clock, recognition_seconds),
-    )
+    executor = ClockExecutor(clock, recognition_seconds)
+    node = SpeechEventNode(scenario.config, bus, clock, RECOGNIZERS[scenario.recognizer](), executor)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     node.start()
     for event in timeline.events:
@@ -64,5 +59,6 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[
         elif isinstance(event, ComeUp):
             sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     clock.advance_to(timeline.end)
+    clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
     node.stop()
     return published

@@ -126,7 +126,8 @@ for _key in _RULES:
     _SPELLINGS[_key] = _key
     _SPELLINGS[_camel_case(_key)] = _key
 
-_LINE = re.compile(r"^(?P<key>[A-Za-z_][A-Za-z0-9_]*)(?:\s*=\s*|\s+)(?P<value>.*)$")
+# A key alone sets it to the empty value: how a file says "no path".
+_LINE = re.compile(r"^(?P<key>[A-Za-z_][A-Za-z0-9_]*)(?:(?:\s*=\s*|\s+)(?P<value>.*))?$")
 
 
 def _unknown_key_message(key: str) -> str:
@@ -172,7 +173,7 @@ def parse_config(text: str, source: str = "<config>") -> SpeechEventConfig:
         where = _where(source, number)
         if match is None:
             raise ConfigError(f"{where}: cannot read {content!r}; expected 'key value' or 'key = value'")
-        spelling, raw = match.group("key"), match.group("value").strip()
+        spelling, raw = match.group("key"), (match.group("value") or "").strip()
         if spelling not in _SPELLINGS:
             raise ConfigError(f"{where}: {_unknown_key_message(spelling)}")
         key = _SPELLINGS[spelling]

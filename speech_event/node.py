@@ -68,6 +68,12 @@ class SpeechEventNode:
     def rejection_counts(self) -> Dict[str, int]:
         return {reason.value: count for reason, count in self._rejections.counts.items()}
 
+    @property
+    def pending_samples(self) -> int:
+        """Samples of the utterance being collected, not yet handed to recognition."""
+        with self._lock:
+            return self._assembler.pending_samples
+
     def start(self) -> None:
         self._text_publisher = self._transport.advertise(TEXT_TOPIC, String)
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)

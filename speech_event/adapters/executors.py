@@ -22,6 +22,11 @@ class ClockExecutor:
         self._job_seconds = job_seconds
         self._free_at = clock.now()
 
+    @property
+    def free_at(self) -> float:
+        """When the worker will have finished every job submitted so far."""
+        return self._free_at
+
     def submit(self, job: Callable[[], None]) -> None:
         finish = max(self._free_at, self._clock.now()) + self._job_seconds
         self._free_at = finish
@@ -32,7 +37,8 @@ class ThreadExecutor:
     """One worker thread and an unbounded queue: a slow recognition never blocks the callback."""
 
     def __init__(self, name: str = "speech_event_recognition") -> None:
-        self._jobs: queue.Queue[Optional[Callable[[], None]]] = queue.Queue()
+        # Annotations inside a function are never evaluated, so the 3.9 generic is safe on 3.8.
+        self._jobs: queue.Queue[Optional[Callable[[], None]]] = queue.Queue()  # novermin
         self._thread = threading.Thread(target=self._work, name=name, daemon=True)
         self._thread.start()
 

@@ -1,0 +1,158 @@
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from speech_event.config import ConfigError, SpeechEventConfig, apply_overrides, load_config, parse_config
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_a_file_sets_keys_in_every_accepted_form_and_leaves_the_rest_at_defaults() -> None:
+    text = (
+        "# Speech Event\n"
+        "language\tKinyarwanda\n"
+        "verbose_mode   true\n"
+        "sample_rate = 16000   # the driver's rate\n"
+        "speechPausePeriod=0.8\n"
+        "rw_model_path /models/rw#1\n"
+        "\n"
+    )
+    assert parse_config(text) == SpeechEventConfig(
+        language="kinyarwanda",
+        verbose_mode=True,
+        sample_rate=16000,
+        speech_pause_period=0.8,
+        rw_model_path="/models/rw#1",
+    )
+
+
+def test_the_robot_camel_case_keys_are_aliases() -> None:
+    config = parse_config(
+        "verboseMode true\nsampleRate 44100\nspeechPausePeriod 2.5\nmaxUtteranceLength 5\n"
+        "confidence 0.4\nheartbeatMsgPeriod 30\n"
+    )
+    assert (config.verbose_mode, config.sample_rate, config.speech_pause_period) == (True, 44100, 2.5)
+    assert (config.max_utterance_length, config.confidence, config.heartbeat_msg_period) == (5.0, 0.4, 30.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "sample_rate abc",
+            "f.ini:1: key 'sample_rate': value 'abc' is not an integer; "
+            "allowed: an integer number of Hz from 8000 to 192000",
+        ),
+        (
+            "language kinyarwanda\nlanguage french",
+            "f.ini:2: key 'language' is set again (first set on line 1); set each key once",
+        ),
+        (
+            "\nlanguage french",
+            "f.ini:2: key 'language': value 'french' is not one of the choices; "
+            "allowed: kinyarwanda or english",
+        ),
+        ("cuda yes", "f.ini:1: key 'cuda': value 'yes' is not a boolean; allowed: true or false"),
+        (
+            "speech_pause_period nan",
+            "f.ini:1: key 'speech_pause_period': value 'nan' is not a number; "
+            "allowed: a number of seconds from 0.05 to 60.0",
+        ),
+        (
+            "max_utterance_length 0.5",
+            "f.ini:1: key 'max_utterance_length': value '0.5' is out of range; "
+            "allowed: a number of seconds from 1.0 to 300.0",
+        ),
+        ("verbose_mode", "f.ini:1: key 'verbose_mode': value '' is not a boolean; allowed: true or false"),
+        ("= 5", "f.ini:1: cannot read '= 5'; expected 'key value' or 'key = value'"),
+        (
+            "speech_pause 1.0",
+            "f.ini:1: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are "
+            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, cuda, sample_rate, "
+            "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
+            "max_message_length, confidence, heartbeat_msg_period",
+        ),
+        (
+            "samplerate 16000",
+            "f.ini:1: unknown key 'samplerate': did you mean 'sample_rate'? known keys are "
+            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, cuda, sample_rate, "
+            "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
+            "max_message_length, confidence, heartbeat_msg_period",
+        ),
+    ],
+)
+def test_a_bad_file_gets_one_error_naming_file_line_key_value_and_what_is_allowed(
+    text: str, message: str
+) -> None:
+    with pytest.raises(ConfigError) as error:
+        parse_config(text, "f.ini")
+    assert str(error.value) == message
+
+
+def test_a_missing_file_is_named() -> None:
+    with pytest.raises(ConfigError) as error:
+        load_config("/nonexistent/speech.ini")
+    assert (
+        str(error.value)
+        == "/nonexistent/speech.ini: cannot read the configuration file: No such file or directory"
+    )
+
+
+def test_typed_overrides_are_checked_like_file_values() -> None:
+    base = SpeechEventConfig()
+    assert apply_overrides(
+        base, {"speechPausePeriod": 1, "publish_unrecognized": True}, "s"
+    ) == SpeechEventConfig(speech_pause_period=1.0, publish_unrecognized=True)
+    with pytest.raises(ConfigError) as error:
+        apply_overrides(base, {"sample_rate": 16000.5}, "s.toml: [config]")
+    assert str(error.value) == (
+        "s.toml: [config]: key 'sample_rate': value 16000.5 is not an integer; "
+        "allowed: an integer number of Hz from 8000 to 192000"
+    )
+    with pytest.raises(ConfigError) as error:
+        apply_overrides(base, {"health_check_period": True}, "s")
+    assert str(error.value) == (
+        "s: key 'health_check_period': value True is not a number; "
+        "allowed: a number of seconds from 0.1 to 3600.0"
+    )
+
+
+@given(
+    pause=st.floats(0.05, 60.0, allow_nan=False),
+    rate=st.integers(8000, 192000),
+    verbose=st.booleans(),
+    language=st.sampled_from(["kinyarwanda", "english"]),
+)
+def test_any_allowed_value_written_to_a_file_reads_back_the_same(
+    pause: float, rate: int, verbose: bool, language: str
+) -> None:
+    text = f"speech_pause_period {pause!r}\nsample_rate {rate}\nverbose_mode {str(verbose).lower()}\nlanguage {language}\n"
+    config = parse_config(text)
+    assert (config.speech_pause_period, config.sample_rate, config.verbose_mode, config.language) == (
+        pause,
+        rate,
+        verbose,
+        language,
+    )
+
+
+def test_the_shipped_node_configuration_is_the_embedded_defaults() -> None:
+    assert load_config(ROOT / "config" / "speech_event_configuration.ini") == SpeechEventConfig()
+
+
+def test_a_bad_configuration_stops_the_program_with_status_2_before_anything_starts(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.ini"
+    bad.write_text("language english\nsampleRate 48k\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "harness", "demo", "-c", str(bad)], cwd=ROOT, capture_output=True, text=True
+    )
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert result.stderr == (
+        f"error: {bad}:2: key 'sample_rate': value '48k' is not an integer; "
+        "allowed: an integer number of Hz from 8000 to 192000\n"
+    )

@@ -1,0 +1,149 @@
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any, Dict
+
+import pytest
+
+from harness.memory_runner import run_in_memory
+from harness.report import report
+from harness.scenario import ScenarioError, load_scenario, parse_scenario
+from speech_event.config import SpeechEventConfig
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def test_there_are_scenarios_for_every_behaviour_the_issue_names() -> None:
+    names = {path.stem for path in SCENARIOS}
+    kinds = ("empty", "nan", "inf", "out_of_range", "multichannel", "oversized", "wrong_type")
+    assert {f"malformed_{kind}" for kind in kinds} <= names
+    assert {
+        "single_utterance",
+        "several_utterances",
+        "long_utterance_split",
+        "noise_only",
+        "outage_shutdown",
+        "outage_crash",
+        "outage_right_after_speech",
+        "outage_then_recovery",
+    } <= names
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=[path.stem for path in SCENARIOS])
+def test_scenario_passes_in_memory(path: Path) -> None:
+    scenario = load_scenario(path, SpeechEventConfig())
+    published = run_in_memory(scenario)
+    assert [message.text for message in published] == list(scenario.expected), report(scenario, published)
+
+
+def test_a_replay_is_deterministic_to_the_message_and_the_time() -> None:
+    scenario = load_scenario(ROOT / "scenarios" / "outage_crash.toml", SpeechEventConfig())
+    first = run_in_memory(scenario)
+    assert first == run_in_memory(scenario)
+    block = 4096 / 48000
+    # "hello" fills 5 blocks; the 1.5 s pause closes it; checks at 2, 4, 6 s find soundDetection down.
+    assert [message.time for message in first[:4]] == pytest.approx([5 * block + 1.5, 2.0, 4.0, 6.0])
+
+
+MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"published": ["hi"]}}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            {"nmae": "x"},
+            "s.toml: unknown key 'nmae'; allowed keys: name, voice, recognizer, background_noise_db, seed, config, steps, expect",
+        ),
+        ({"name": None}, "s.toml: 'name' is required"),
+        (
+            {"steps": [{"say": "hi", "silence": 1}]},
+            "s.toml: steps[0]: a step needs exactly one of say, silence, noise, malformed, outage; it has say, silence",
+        ),
+        (
+            {"steps": [{"silence": -1}]},
+            "s.toml: steps[0]: 'silence' = -1.0 must be a number of seconds above 0 and at most 3600",
+        ),
+        (
+            {"steps": [{"malformed": "garbled"}]},
+            "s.toml: steps[0]: 'malformed' = 'garbled' is not allowed; allowed: empty, nan, inf, out_of_range, multichannel, oversized, wrong_type",
+        ),
+        (
+            {"steps": [{"outage": 2, "kind": "explode"}]},
+            "s.toml: steps[0]: 'kind' = 'explode' is not allowed; allowed: shutdown, crash",
+        ),
+        (
+            {"steps": [{"say": "Hello!"}]},
+            "s.toml: steps[0]: the tones voice cannot speak '!', 'H'; it speaks only [a-z' ]",
+        ),
+        ({"steps": [{"say": 5}]}, "s.toml: steps[0]: 'say' = 5 must be of type str"),
+        ({"voice": "robot"}, "s.toml: 'voice' = 'robot' is not allowed; allowed: tones"),
+        (
+            {"config": {"speech_pause": 1}},
+            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, cuda, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period",
+        ),
+        ({"expect": {"published": [1]}}, "s.toml: [expect]: 'published' must be a list of strings"),
+    ],
+)
+def test_a_bad_scenario_is_refused_with_where_and_what_is_allowed(
+    change: Dict[str, Any], message: str
+) -> None:
+    document = {**MINIMAL, **change}
+    document = {key: value for key, value in document.items() if value is not None}
+    with pytest.raises(ScenarioError) as error:
+        parse_scenario(document, "s.toml", SpeechEventConfig())
+    assert str(error.value) == message
+
+
+def _harness(*arguments: str) -> "subprocess.CompletedProcess[str]":
+    return subprocess.run(
+        [sys.executable, "-m", "harness", *arguments], cwd=ROOT, capture_output=True, text=True
+    )
+
+
+def test_the_cli_prints_a_line_per_scenario_and_exits_0_when_all_pass() -> None:
+    result = _harness(
+        "run", "--transport", "memory", "scenarios/single_utterance.toml", "scenarios/noise_only.toml"
+    )
+    assert result.returncode == 0
+    assert result.stdout == (
+        "PASS  one command  (scenarios/single_utterance.toml, 1 messages)\n"
+        "PASS  noise alone publishes nothing  (scenarios/noise_only.toml, 0 messages)\n"
+        "2 passed, 0 failed\n"
+    )
+
+
+def test_the_cli_shows_a_diff_and_exits_1_when_a_scenario_fails(tmp_path: Path) -> None:
+    wrong = tmp_path / "wrong.toml"
+    wrong.write_text('name = "wrong"\n[[steps]]\nsay = "go left"\n[expect]\npublished = ["go right"]\n')
+    result = _harness("run", str(wrong))
+    assert result.returncode == 1
+    assert result.stdout == (
+        f"FAIL  wrong  ({wrong})\n"
+        "      --- expected\n"
+        "      +++ published\n"
+        "      @@ -1 +1 @@\n"
+        "      -go right\n"
+        "      +go left\n"
+        "      published, with scenario times:\n"
+        "        t=   2.012 s  'go left'\n"  # 6 blocks end at 0.512 s, then the 1.5 s pause
+        "0 passed, 1 failed\n"
+    )
+
+
+def test_the_cli_exits_2_on_a_bad_scenario_file(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = \n")
+    result = _harness("run", str(bad))
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"error: {bad}: not valid TOML: ")
+
+
+def test_the_demo_turns_speech_into_text() -> None:
+    result = _harness("demo")
+    assert result.returncode == 0
+    assert result.stdout == (
+        "soundDetection says 'go to the kitchen' (tones voice, 48000 Hz, 4096-sample blocks)\n"
+        "/speechEvent/text at t=2.524 s: 'go to the kitchen'\n"  # 12 blocks, then the 1.5 s pause
+    )

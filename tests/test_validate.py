@@ -1,0 +1,108 @@
+import logging
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from fixtures.malformed import malformed_message
+from speech_event.messages import Float32MultiArray, MultiArrayDimension, MultiArrayLayout
+from speech_event.rejections import RejectionLog
+from speech_event.validate import Reason, Rejection, validate_signal
+
+RATE = 48000
+CAP = 60 * RATE
+
+
+@pytest.mark.parametrize(
+    ("kind", "reason", "detail_start"),
+    [
+        ("empty", Reason.EMPTY, "empty data (allowed: 1 or more float32 samples)"),
+        ("nan", Reason.NON_FINITE, "3 of 4096 samples are NaN or Inf (allowed: finite values in [-1, 1])"),
+        ("inf", Reason.NON_FINITE, "3 of 4096 samples are NaN or Inf (allowed: finite values in [-1, 1])"),
+        ("out_of_range", Reason.OUT_OF_RANGE, "peak value "),
+        (
+            "multichannel",
+            Reason.MULTI_DIMENSIONAL,
+            "layout has dimensions 2 x 4096 (allowed: mono audio, an empty layout or one dimension)",
+        ),
+        (
+            "oversized",
+            Reason.OVERSIZED,
+            "2928000 samples in one message (allowed: at most 2880000, set by max_message_length)",
+        ),
+        (
+            "wrong_type",
+            Reason.WRONG_TYPE,
+            "message of type std_msgs/String (allowed: std_msgs/Float32MultiArray with mono float32 samples)",
+        ),
+    ],
+)
+def test_each_malformed_kind_is_rejected_with_its_reason_and_what_is_allowed(
+    kind: str, reason: Reason, detail_start: str
+) -> None:
+    # seed 3 draws three distinct NaN/Inf positions
+    message = malformed_message(kind, RATE, 60.0, np.random.default_rng(3))
+    result = validate_signal(message, CAP)
+    assert isinstance(result, Rejection)
+    assert result.reason is reason
+    assert result.detail.startswith(detail_start)
+
+
+def test_int16_pcm_published_as_float_is_named_as_such() -> None:
+    message = Float32MultiArray(data=np.array([0.0, 1200.0, -32767.0], dtype=np.float32))
+    assert validate_signal(message, CAP) == Rejection(
+        Reason.OUT_OF_RANGE,
+        "peak value 32767 is outside [-1, 1] (allowed: float32 samples in [-1, 1]); "
+        "it looks like int16 PCM published as float: divide by 32768 before publishing",
+    )
+
+
+def test_a_slight_overshoot_is_out_of_range_without_the_int16_hint() -> None:
+    message = Float32MultiArray(data=[0.5, 1.25])
+    assert validate_signal(message, CAP) == Rejection(
+        Reason.OUT_OF_RANGE, "peak value 1.25 is outside [-1, 1] (allowed: float32 samples in [-1, 1])"
+    )
+
+
+def test_valid_audio_is_accepted_as_float32_including_a_rospy_shaped_message() -> None:
+    ros_like = SimpleNamespace(
+        _type="std_msgs/Float32MultiArray",
+        layout=SimpleNamespace(dim=[], data_offset=0),
+        data=(0.25, -1.0, 1.0),
+    )
+    samples = validate_signal(ros_like, CAP)
+    assert isinstance(samples, np.ndarray)
+    assert samples.dtype == np.float32
+    assert samples.tolist() == [0.25, -1.0, 1.0]
+
+
+def test_a_layout_with_one_channel_dimension_is_mono() -> None:
+    layout = MultiArrayLayout(
+        dim=(MultiArrayDimension("channels", 1, 3), MultiArrayDimension("samples", 3, 3))
+    )
+    samples = validate_signal(Float32MultiArray(data=[0.0, 0.1, 0.2], layout=layout), CAP)
+    assert isinstance(samples, np.ndarray)
+    assert samples.size == 3
+
+
+def test_warnings_are_counted_per_reason_and_rate_limited(caplog: pytest.LogCaptureFixture) -> None:
+    now = [0.0]
+    log = RejectionLog(lambda: now[0], "/soundDetection/signal", interval=10.0)
+    nan = Rejection(Reason.NON_FINITE, "1 of 2 samples are NaN or Inf")
+    empty = Rejection(Reason.EMPTY, "empty data")
+    with caplog.at_level(logging.WARNING, logger="speech_event"):
+        for step in range(5):
+            now[0] = step * 1.0
+            log.record(nan)
+        log.record(empty)
+        now[0] = 12.0
+        log.record(nan)
+    assert [record.getMessage() for record in caplog.records] == [
+        "rejected a message on /soundDetection/signal: 1 of 2 samples are NaN or Inf",
+        "rejected a message on /soundDetection/signal: empty data",
+        "rejected a message on /soundDetection/signal: 1 of 2 samples are NaN or Inf"
+        " (4 more like it since the last warning)",
+    ]
+    assert log.counts[Reason.NON_FINITE] == 6
+    assert log.counts[Reason.EMPTY] == 1
+    assert log.counts[Reason.OVERSIZED] == 0
