@@ -7,8 +7,7 @@ from typing import Callable, Dict, Optional
 import numpy as np
 
 from fixtures.audio import speak_tones
-from speech_event.ports import Recognizer
-from speech_event.recognizers.tones import ToneRecognizer
+from speech_event.recognizers import RECOGNIZERS
 
 
 @dataclass(frozen=True)
@@ -32,4 +31,4 @@ class Voice:
 
 VOICES: Dict[str, Voice] = {"tones": Voice(speak_tones, "[a-z' ]")}
 
-RECOGNIZERS: Dict[str, Callable[[], Recognizer]] = {"fake": ToneRecognizer}
+__all__ = ["RECOGNIZERS", "VOICES", "Voice"]

@@ -3,12 +3,13 @@
 import argparse
 import logging
 import sys
-from typing import List, Optional
+from contextlib import ExitStack
+from typing import Callable, List, Optional
 
 from harness.catalog import VOICES
-from harness.memory_runner import run_in_memory
+from harness.memory_runner import Published, run_in_memory
 from harness.report import passed, report
-from harness.scenario import Say, Scenario, ScenarioError, load_scenario
+from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 
 USAGE_ERROR = 2
@@ -18,14 +19,27 @@ def _base_config(path: Optional[str]) -> SpeechEventConfig:
     return load_config(path) if path else SpeechEventConfig()
 
 
+def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scenario], List[Published]]:
+    """How to play one scenario on the chosen transport."""
+    if arguments.transport == "memory":
+        return run_in_memory
+    from harness.ros_runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
+
+    options = RosOptions(arguments.real_time, arguments.node_command, arguments.config)
+    replay = RosReplay(stack, options)
+    return lambda scenario: replay.play(scenario, scenario.source)
+
+
 def _run(arguments: argparse.Namespace) -> int:
     base = _base_config(arguments.config)
     scenarios = [load_scenario(path, base) for path in arguments.files]
     failures = 0
-    for scenario in scenarios:
-        published = run_in_memory(scenario)
-        print(report(scenario, published), flush=True)
-        failures += not passed(scenario, published)
+    with ExitStack() as stack:
+        play = _replays(arguments, stack)
+        for scenario in scenarios:
+            published = play(scenario)
+            print(report(scenario, published), flush=True)
+            failures += not passed(scenario, published)
     print(f"{len(scenarios) - failures} passed, {failures} failed")
     return 1 if failures else 0
 
@@ -56,7 +70,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="replay scenario files and check what the node publishes")
     run.add_argument("files", nargs="+", metavar="FILE.toml")
-    run.add_argument("--transport", choices=["memory"], default="memory")
+    run.add_argument("--transport", choices=["memory", "ros"], default="memory")
+    run.add_argument(
+        "--real-time", action="store_true", help="ros: play on the wall clock instead of driving /clock"
+    )
+    run.add_argument(
+        "--node-command",
+        help="ros: run the scenarios against this command instead of our node ({config} = its config file)",
+    )
     run.add_argument("-c", "--config", help="configuration file the scenarios' [config] overrides")
     run.set_defaults(handler=_run)
     demo = commands.add_parser("demo", help="speech in, text out: the node on the in-memory bus")
@@ -70,3 +91,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     except (ConfigError, ScenarioError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return USAGE_ERROR
+    except ReplayError as problem:
+        print(f"error: the replay could not go on: {problem}", file=sys.stderr)
+        return 1

@@ -186,6 +186,17 @@ def parse_config(text: str, source: str = "<config>") -> SpeechEventConfig:
     return dataclasses.replace(SpeechEventConfig(), **values)  # type: ignore[arg-type]
 
 
+def format_config(config: SpeechEventConfig) -> str:
+    """The text of a configuration file that ``parse_config`` reads back as ``config``."""
+
+    def text(value: object) -> str:
+        return str(value).lower() if isinstance(value, bool) else str(value)
+
+    return "".join(
+        f"{field.name} {text(getattr(config, field.name))}\n" for field in dataclasses.fields(config)
+    )
+
+
 def load_config(path: Union[str, Path]) -> SpeechEventConfig:
     try:
         text = Path(path).read_text(encoding="utf-8")

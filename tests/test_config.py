@@ -6,7 +6,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from speech_event.config import ConfigError, SpeechEventConfig, apply_overrides, load_config, parse_config
+from speech_event.config import (
+    ConfigError,
+    SpeechEventConfig,
+    apply_overrides,
+    format_config,
+    load_config,
+    parse_config,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -156,3 +163,21 @@ def test_a_bad_configuration_stops_the_program_with_status_2_before_anything_sta
         f"error: {bad}:2: key 'sample_rate': value '48k' is not an integer; "
         "allowed: an integer number of Hz from 8000 to 192000\n"
     )
+
+
+@given(
+    pause=st.floats(0.05, 60.0),
+    storage=st.text(alphabet="abc/_-.", max_size=20),
+    unrecognized=st.booleans(),
+    language=st.sampled_from(["kinyarwanda", "english"]),
+)
+def test_a_formatted_configuration_reads_back_the_same(
+    pause: float, storage: str, unrecognized: bool, language: str
+) -> None:
+    config = SpeechEventConfig(
+        speech_pause_period=pause,
+        audio_storage_dir=storage,
+        publish_unrecognized=unrecognized,
+        language=language,
+    )
+    assert parse_config(format_config(config)) == config

@@ -1,0 +1,320 @@
+"""Plays scenarios to the node on a real roscore: the node and soundDetection are processes of their own.
+
+By default the runner drives ROS time through /clock (/use_sim_time), so messages and error counts
+are as exact as in memory although processes start and die in real time: before it moves the clock
+on it waits for each real event (the node has received a block, a connection has dropped or been
+made), and after each clock step it gives the node's timers time to run. ``real_time`` plays on the
+wall clock instead. Every process it starts is stopped again, also on failure or Ctrl-C.
+"""
+
+import os
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import xmlrpc.client
+from contextlib import ExitStack, closing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Set
+
+import rosgraph
+import rospy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
+
+from harness.memory_runner import Published
+from harness.scenario import ReplayError, Scenario
+from harness.timeline import ComeUp, Event, GoDown, Publish, Timeline, build_timeline
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.config import format_config
+from speech_event.messages import Float32MultiArray, message_type_name
+from speech_event.validate import Rejection, validate_signal
+
+ROOT = Path(__file__).resolve().parents[1]
+NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"
+SOUND_DETECTION_SCRIPT = ROOT / "scripts" / "sound_detection_replay.py"
+STARTUP_TIMEOUT = 60.0
+EVENT_TIMEOUT = 20.0
+# After each clock step, the node's timers run; after the step that ends an utterance, its
+# recognition runs and its text is published: the runner waits this long for that text.
+TIMER_SETTLE = 0.03
+TEXT_WAIT = 1.0
+
+
+def _wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT_TIMEOUT) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise ReplayError(f"gave up after {timeout:.0f} s waiting for {what}")
+        time.sleep(0.002)
+
+
+def free_port() -> int:
+    with closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+class Processes:
+    """Every process the runner starts, each in its own process group, all stopped at the end."""
+
+    def __init__(self, environment: Dict[str, str], log_dir: Path) -> None:
+        self._environment = environment
+        self._log_dir = log_dir
+        self._started: List[subprocess.Popen] = []  # type: ignore[type-arg]
+
+    def start(self, name: str, command: Sequence[str], talk: bool = False) -> "subprocess.Popen[str]":
+        log = open(self._log_dir / f"{name}.log", "a")  # noqa: SIM115 - closed with the process
+        process = subprocess.Popen(
+            list(command),
+            env=self._environment,
+            stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
+            stdout=subprocess.PIPE if talk else log,
+            stderr=log,
+            text=True,
+            start_new_session=True,
+        )
+        self._started.append(process)
+        return process
+
+    def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
+        if process.poll() is None:
+            with _suppress_lookup():
+                os.killpg(process.pid, signal.SIGINT)
+            try:
+                process.wait(grace)
+            except subprocess.TimeoutExpired:
+                with _suppress_lookup():
+                    os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+
+    def stop_all(self) -> None:
+        for process in reversed(self._started):
+            self.stop(process)
+
+
+class _suppress_lookup:
+    """The process may have gone already: that is what was wanted."""
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: object, value: object, trace: object) -> bool:
+        return kind is ProcessLookupError
+
+
+@dataclass
+class RosOptions:
+    real_time: bool = False
+    node_command: Optional[str] = None
+    base_config: Optional[str] = None
+
+
+class RosReplay:
+    """One roscore (its own, or the one ROS_MASTER_URI names) and the harness's own ROS node."""
+
+    def __init__(self, stack: ExitStack, options: RosOptions) -> None:
+        self._options = options
+        self._work = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="speech_event_ros_")))
+        environment = dict(os.environ)
+        environment.setdefault("ROS_IP", "127.0.0.1")
+        environment["ROS_HOME"] = str(self._work / "ros_home")
+        environment["ROS_LOG_DIR"] = str(self._work / "ros_log")
+        environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), environment.get("PYTHONPATH")]))
+        self.processes = Processes(environment, self._work)
+        stack.callback(self.processes.stop_all)
+        if "ROS_MASTER_URI" not in os.environ:
+            port = free_port()
+            environment["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+            self.processes.start("roscore", ["roscore", "-p", str(port)])
+        os.environ.update({key: environment[key] for key in ("ROS_MASTER_URI", "ROS_IP")})
+        self._master = rosgraph.Master("/speechEventReplay", master_uri=environment["ROS_MASTER_URI"])
+        _wait_until(
+            self._master_answers, "the ROS master at " + environment["ROS_MASTER_URI"], STARTUP_TIMEOUT
+        )
+        rospy.set_param("/use_sim_time", not options.real_time)
+        rospy.init_node("speechEventReplay", disable_signals=True)
+        self._clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+        self._texts: List[Published] = []
+        self._now = 0.0
+        self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
+
+    def _master_answers(self) -> bool:
+        try:
+            self._master.getPid()
+            return True
+        except Exception:
+            return False
+
+    def _on_text(self, message: String) -> None:
+        self._texts.append(Published(self._now, message.data))
+
+    # -- the clock --------------------------------------------------------------------------------
+
+    def _set_clock(self, when: float, wall_start: float) -> None:
+        self._now = when
+        if self._options.real_time:
+            time.sleep(max(0.0, wall_start + when - time.monotonic()))
+        else:
+            self._clock.publish(Clock(clock=rospy.Time.from_sec(when)))
+            time.sleep(TIMER_SETTLE)
+
+    # -- the node under test ----------------------------------------------------------------------
+
+    def _start_node(self, scenario: Scenario) -> "subprocess.Popen[str]":
+        config_path = self._work / "speech_event_configuration.ini"
+        config_path.write_text(format_config(scenario.config))
+        if self._options.node_command:
+            command = shlex.split(self._options.node_command.format(config=config_path))
+        else:
+            command = [
+                sys.executable,
+                str(NODE_SCRIPT),
+                "-c",
+                str(config_path),
+                "--recognizer",
+                scenario.recognizer,
+            ]
+        return self.processes.start("node", command)
+
+    def _node_uri(self) -> str:
+        _, subscribers, _ = self._master.getSystemState()
+        nodes = [node for topic, names in subscribers if topic == SIGNAL_TOPIC for node in names]
+        others = [node for node in nodes if node != "/speechEventReplay"]
+        if not others:
+            raise ReplayError(f"no node subscribes to {SIGNAL_TOPIC}")
+        return str(self._master.lookupNode(others[0]))
+
+    def _node_ready(self) -> bool:
+        try:
+            _, subscribers, _ = self._master.getSystemState()
+        except Exception:
+            return False
+        listening = any(topic == SIGNAL_TOPIC and names for topic, names in subscribers)
+        return listening and self._text_subscriber.get_num_connections() > 0
+
+    def _live_connections(self, node_uri: str) -> List[Any]:
+        """The node's live connections on the signal topic, as getBusStats gives them:
+        [connection id, bytes received, messages received, drop estimate, connected]."""
+        proxy = xmlrpc.client.ServerProxy(node_uri)
+        stats: Any = proxy.getBusStats("/speechEventReplay")
+        subscriptions = stats[2][1]
+        return [
+            c for topic, connections in subscriptions if topic == SIGNAL_TOPIC for c in connections if c[4]
+        ]
+
+    # -- playing ----------------------------------------------------------------------------------
+
+    def play(self, scenario: Scenario, scenario_path: str) -> List[Published]:
+        timeline = build_timeline(scenario)
+        self._texts = []
+        self._set_clock(0.0, time.monotonic())
+        node = self._start_node(scenario)
+        _wait_until(self._node_ready, "the node to subscribe and advertise", STARTUP_TIMEOUT)
+        stand_in = _StandIn(self.processes, scenario_path, self._options.base_config, self._node_uri())
+        closing_times = _utterance_closing_times(scenario, timeline)
+        wall_start = time.monotonic()
+        for when in _times_to_visit(scenario, timeline, closing_times):
+            self._set_clock(when, wall_start)
+            if when in closing_times:
+                self._wait_for_a_text()
+            for index, event in enumerate(timeline.events):
+                if event.time == when:
+                    stand_in.play(index, event, self._live_connections)
+        stand_in.stop()
+        self.processes.stop(node)
+        return list(self._texts)
+
+    def _wait_for_a_text(self) -> None:
+        """At an utterance's end, give its recognition time to publish before moving on."""
+        count = len(self._texts)
+        deadline = time.monotonic() + TEXT_WAIT
+        while len(self._texts) == count and time.monotonic() < deadline:
+            time.sleep(0.002)
+
+
+class _StandIn:
+    """The soundDetection process of a replay: started, told to publish, shut down or killed."""
+
+    def __init__(
+        self, processes: Processes, scenario_path: str, base_config: Optional[str], node_uri: str
+    ) -> None:
+        self._processes = processes
+        self._command = [sys.executable, str(SOUND_DETECTION_SCRIPT), scenario_path]
+        if base_config:
+            self._command += ["-c", base_config]
+        self._node_uri = node_uri
+        self._process = self._start()
+        self._sent = 0  # messages this incarnation has published
+
+    def _start(self) -> "subprocess.Popen[str]":
+        process = self._processes.start("sound_detection", self._command, talk=True)
+        self._expect(process, "ready")
+        return process
+
+    @staticmethod
+    def _expect(process: "subprocess.Popen[str]", expected: str) -> None:
+        line = process.stdout.readline().strip() if process.stdout else ""
+        if line != expected:
+            raise ReplayError(f"the soundDetection stand-in said {line!r}, expected {expected!r}")
+
+    def _tell(self, command: str) -> None:
+        assert self._process.stdin is not None
+        self._process.stdin.write(command + "\n")
+        self._process.stdin.flush()
+
+    def play(self, index: int, event: Event, live_connections: Callable[[str], List[Any]]) -> None:
+        if isinstance(event, Publish) and message_type_name(event.message) == Float32MultiArray._type:
+            self._tell(f"publish {index}")
+            self._expect(self._process, f"published {index}")
+            self._sent += 1
+            sent = self._sent
+            _wait_until(
+                lambda: any(int(c[2]) >= sent for c in live_connections(self._node_uri)),
+                f"the node to receive message {sent}",
+            )
+        elif isinstance(event, Publish):
+            intruder = self._processes.start("wrong_type", [*self._command, "--wrong-type", str(index)])
+            if intruder.wait(EVENT_TIMEOUT) != 0:
+                raise ReplayError("the wrong-type publisher failed; see its log")
+        elif isinstance(event, GoDown):
+            if event.kind == "crash":
+                os.killpg(self._process.pid, signal.SIGKILL)
+            else:
+                self._tell("shutdown")
+            self._process.wait(EVENT_TIMEOUT)
+            _wait_until(lambda: not live_connections(self._node_uri), "the node to lose soundDetection")
+        elif isinstance(event, ComeUp):
+            self._process = self._start()
+            self._sent = 0
+
+    def stop(self) -> None:
+        self._processes.stop(self._process)
+
+
+def _utterance_closing_times(scenario: Scenario, timeline: Timeline) -> Set[float]:
+    """Times at which the node ends an utterance: the pause after the last block of each burst."""
+    pause = scenario.config.speech_pause_period
+    max_samples = int(scenario.config.max_message_length * scenario.config.sample_rate)
+    arrivals = [
+        event.time
+        for event in timeline.events
+        if isinstance(event, Publish)
+        and not isinstance(validate_signal(event.message, max_samples), Rejection)
+    ]
+    return {
+        arrival + pause
+        for arrival, following in zip(arrivals, [*arrivals[1:], float("inf")])
+        if following - arrival >= pause
+    }
+
+
+def _times_to_visit(scenario: Scenario, timeline: Timeline, closing_times: Set[float]) -> List[float]:
+    period = scenario.config.health_check_period
+    checks = {period * k for k in range(1, int(timeline.end / period) + 1)}
+    events = {event.time for event in timeline.events}
+    return sorted({*events, *checks, *closing_times, timeline.end})

@@ -1,0 +1,129 @@
+"""The rospy adapters: RosTransport and RosClock. The only module of speech_event that imports rospy.
+
+Audio arrives through rospy's numpy deserializer (np.frombuffer), so a 4096-float message costs
+no per-float Python work. Publisher status combines the master's registrations with the
+subscriber's live connections: a soundDetection killed with SIGKILL stays registered on the
+master but its connection is gone, and that reads as down.
+"""
+
+import logging
+from typing import Callable, Dict
+
+import rosgraph
+import rospy
+from rospy.numpy_msg import numpy_msg
+from std_msgs import msg as std_msgs
+
+from speech_event import messages
+from speech_event.ports import PublisherStatus
+
+_LOG = logging.getLogger("speech_event")
+
+# Bursts of blocks must not be dropped: soundDetection can flush a backlog after a stall.
+AUDIO_QUEUE_SIZE = 1000
+TEXT_QUEUE_SIZE = 100
+# rospy's receive buffer: large enough for the biggest message the node accepts in one read.
+AUDIO_BUFFER_BYTES = 1 << 24
+
+
+def _to_ros(message: object) -> object:
+    if isinstance(message, messages.String):
+        return std_msgs.String(data=message.data)
+    if isinstance(message, messages.Float32MultiArray):
+        dims = [std_msgs.MultiArrayDimension(d.label, d.size, d.stride) for d in message.layout.dim]
+        layout = std_msgs.MultiArrayLayout(dim=dims, data_offset=message.layout.data_offset)
+        return std_msgs.Float32MultiArray(layout=layout, data=message.data)
+    return message  # already a rospy message
+
+
+_ROS_TYPES: Dict[type, type] = {
+    messages.String: std_msgs.String,
+    messages.Float32MultiArray: std_msgs.Float32MultiArray,
+}
+
+
+class RosPublisher:
+    def __init__(self, publisher: rospy.Publisher) -> None:
+        self._publisher = publisher
+
+    def publish(self, message: object) -> None:
+        self._publisher.publish(_to_ros(message))
+
+    def unregister(self) -> None:
+        self._publisher.unregister()
+
+    def connections(self) -> int:
+        return int(self._publisher.get_num_connections())
+
+
+class RosTransport:
+    def __init__(self) -> None:
+        self._subscribers: Dict[str, rospy.Subscriber] = {}
+
+    def advertise(self, topic: str, message_type: type) -> RosPublisher:
+        ros_type = _ROS_TYPES.get(message_type, message_type)
+        queue = AUDIO_QUEUE_SIZE if ros_type is std_msgs.Float32MultiArray else TEXT_QUEUE_SIZE
+        return RosPublisher(rospy.Publisher(topic, ros_type, queue_size=queue))
+
+    def subscribe(self, topic: str, message_type: type, callback: Callable[[object], None]) -> None:
+        ros_type = _ROS_TYPES.get(message_type, message_type)
+        if ros_type is std_msgs.Float32MultiArray:
+            ros_type = numpy_msg(ros_type)
+        self._subscribers[topic] = rospy.Subscriber(
+            topic, ros_type, callback, queue_size=None, buff_size=AUDIO_BUFFER_BYTES, tcp_nodelay=True
+        )
+
+    def publisher_status(self, topic: str) -> PublisherStatus:
+        try:
+            publishers, _, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+        except Exception as problem:  # the master itself is gone: nothing can be confirmed
+            _LOG.warning("cannot ask the ROS master about %s: %s", topic, problem)
+            return PublisherStatus.NONE
+        if not any(name == topic and nodes for name, nodes in publishers):
+            return PublisherStatus.NONE
+        subscriber = self._subscribers.get(topic)
+        if subscriber is None or subscriber.get_num_connections() > 0:
+            return PublisherStatus.CONNECTED
+        return PublisherStatus.STALE
+
+
+class RosTimer:
+    def __init__(self, timer: rospy.Timer) -> None:
+        self._timer = timer
+
+    def cancel(self) -> None:
+        self._timer.shutdown()
+
+
+# rospy's timer arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock
+# is stepped could miss that step by 1 ns. Timers fire this much early; the node's callbacks check
+# the time themselves (a pause timer that fires early is set again).
+EARLY = 1e-4
+# rospy.Timer divides by its period: a timer that is already due waits this long instead.
+_SHORTEST_WAIT = 1e-4
+
+
+class RosClock:
+    """ROS time: the wall clock, or /clock when /use_sim_time is set."""
+
+    def now(self) -> float:
+        return float(rospy.get_time())
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> RosTimer:
+        wait = max(when - EARLY - self.now(), _SHORTEST_WAIT)
+        return RosTimer(rospy.Timer(rospy.Duration.from_sec(wait), lambda _event: callback(), oneshot=True))
+
+
+class RosLogHandler(logging.Handler):
+    """Sends the node's log records to rosout, so they show in rqt_console and the launch log."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = self.format(record)
+        if record.levelno >= logging.ERROR:
+            rospy.logerr(text)
+        elif record.levelno >= logging.WARNING:
+            rospy.logwarn(text)
+        elif record.levelno >= logging.INFO:
+            rospy.loginfo(text)
+        else:
+            rospy.logdebug(text)

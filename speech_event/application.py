@@ -1,0 +1,64 @@
+"""The deployment node: ``speech-event -c CONFIG`` (or scripts/speech_event_application.py).
+
+Reads the configuration before touching ROS, so a bad file stops it with status 2 and one clear
+message. On SIGINT it stops its timers and gives the running recognition 2 s to finish.
+"""
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+from typing import List, Optional
+
+from speech_event.config import ConfigError, SpeechEventConfig, load_config
+from speech_event.recognizers import RECOGNIZERS
+
+NODE_NAME = "speechEvent"
+SHUTDOWN_GRACE_SECONDS = 2.0
+DEFAULT_CONFIG = Path(__file__).resolve().parents[1] / "config" / "speech_event_configuration.ini"
+
+
+def _arguments(argv: List[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="speech-event", description="The Speech Event ROS node.")
+    parser.add_argument("-c", "--config", default=str(DEFAULT_CONFIG), help="configuration file")
+    parser.add_argument(
+        "--recognizer",
+        choices=sorted(RECOGNIZERS),
+        required=True,
+        help="speech engine; 'fake' decodes the tones voice (scenario replay)",
+    )
+    return parser.parse_args(argv)
+
+
+def run(config: SpeechEventConfig, recognizer_name: str) -> None:
+    import rospy  # only the ROS entry point needs it
+
+    from speech_event.adapters.executors import ThreadExecutor
+    from speech_event.adapters.ros import RosClock, RosLogHandler, RosTransport
+    from speech_event.node import SpeechEventNode
+
+    rospy.init_node(NODE_NAME)
+    logger = logging.getLogger("speech_event")
+    logger.addHandler(RosLogHandler())
+    logger.setLevel(logging.INFO if config.verbose_mode else logging.WARNING)
+    logger.propagate = False
+    executor = ThreadExecutor()
+    node = SpeechEventNode(config, RosTransport(), RosClock(), RECOGNIZERS[recognizer_name](), executor)
+    node.start()
+    rospy.spin()
+    node.stop()
+    if not executor.shutdown(SHUTDOWN_GRACE_SECONDS):
+        logger.warning("abandoned a recognition still running after %.0f s", SHUTDOWN_GRACE_SECONDS)
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    # rospy's remappings (name:=value, __name:=...) are for rospy, not for argparse.
+    raw = sys.argv[1:] if argv is None else argv
+    arguments = _arguments([word for word in raw if ":=" not in word])
+    try:
+        config = load_config(arguments.config)
+    except ConfigError as problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
+    run(config, arguments.recognizer)
+    return 0
