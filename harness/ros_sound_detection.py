@@ -1,58 +1,63 @@
 """The soundDetection stand-in for replay on a real roscore (its own process).
 
-It builds the scenario's timeline itself (the same, seeded, as the harness's) and publishes
-events when told, one line each on stdin/stdout: it prints ``ready`` once the node is connected;
-``publish I`` publishes event I and prints ``published I``; ``shutdown`` unregisters cleanly and
-exits. The harness kills it with SIGKILL for a crash. With ``--wrong-type I`` it is instead another
-node that publishes event I (a message of another type) on the topic once, then leaves.
+It builds the scenario's timeline itself (the same, seeded, as the harness's). Stepped by the
+harness, it publishes events when told, one line each on stdin/stdout: it prints ``ready`` once the
+node is connected; ``publish I`` publishes event I and prints ``published I``; ``shutdown``
+unregisters cleanly and exits. The harness kills it with SIGKILL for a crash. With ``--wrong-type I``
+it is instead another node that publishes event I (a message of another type) on the topic once.
+
+With ``--autonomous`` (the test-harness launch file) it plays the whole timeline by itself, driving
+/clock, once the checker listens, then says so on /speechEventReplay/done. A crash cannot be played
+from inside the process that crashes, so there it refuses scenarios with ``kind = "crash"``.
 """
 
 import argparse
+import subprocess
 import sys
 import time
 from typing import List, Optional
 
 import rospy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
 
 from harness.scenario import load_scenario
-from harness.timeline import Publish, build_timeline
+from harness.timeline import ComeUp, GoDown, Publish, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC
-from speech_event.adapters.ros import RosTransport
+from speech_event.adapters.ros import RosPublisher, RosTransport
 from speech_event.config import SpeechEventConfig, load_config
 from speech_event.messages import Float32MultiArray
 
 CONNECT_TIMEOUT = 30.0
+CLOCK_TICK = 0.005
+CHECKER_READY_TOPIC = "/speechEventReplay/checker_ready"
+DONE_TOPIC = "/speechEventReplay/done"
 
 
 def _say(line: str) -> None:
     print(line, flush=True)
 
 
-def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(prog="sound_detection_replay")
-    parser.add_argument("scenario")
-    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
-    parser.add_argument("--wrong-type", type=int, metavar="I", help="publish event I as another node")
-    arguments = parser.parse_args([word for word in (argv or sys.argv[1:]) if ":=" not in word])
-    base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
-    events = build_timeline(load_scenario(arguments.scenario, base)).events
-    transport = RosTransport()
-    if arguments.wrong_type is not None:
-        rospy.init_node("wrongTypePublisher", disable_signals=True)
-        event = events[arguments.wrong_type]
-        assert isinstance(event, Publish)
-        intruder = transport.advertise(SIGNAL_TOPIC, type(event.message))
-        intruder.publish(event.message)  # the node refuses the connection: nothing arrives
-        intruder.unregister()
-        return 0
-    rospy.init_node("soundDetection", disable_signals=True)
-    publisher = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
+def _connected(publisher: RosPublisher) -> bool:
     deadline = time.monotonic() + CONNECT_TIMEOUT
     while publisher.connections() == 0:
         if time.monotonic() > deadline:
             _say(f"error: no subscriber connected to {SIGNAL_TOPIC} in {CONNECT_TIMEOUT:.0f} s")
-            return 1
+            return False
         time.sleep(0.005)
+    return True
+
+
+def _publish_wrong_type(events: List[object], index: int) -> None:
+    event = events[index]
+    assert isinstance(event, Publish)
+    rospy.init_node("wrongTypePublisher", disable_signals=True)
+    intruder = RosTransport().advertise(SIGNAL_TOPIC, type(event.message))
+    intruder.publish(event.message)  # the node refuses the connection: nothing arrives
+    intruder.unregister()
+
+
+def _play_stepped(events: List[object], publisher: RosPublisher) -> int:
     _say("ready")
     for line in sys.stdin:
         command, _, argument = line.strip().partition(" ")
@@ -66,3 +71,62 @@ def main(argv: Optional[List[str]] = None) -> int:
             rospy.signal_shutdown("scenario: soundDetection shuts down")
             return 0
     return 0
+
+
+def _play_alone(timeline: Timeline, publisher: RosPublisher, wrong_type_command: List[str]) -> int:
+    # The launch file sets /use_sim_time and this process, which never dies in this mode, drives
+    # /clock: the scenario's t = 0 is the node's start, as in the harness, and time runs at real pace.
+    clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+    clock.publish(Clock(clock=rospy.Time(0)))
+    rospy.wait_for_message(CHECKER_READY_TOPIC, String, timeout=CONNECT_TIMEOUT)
+    events = list(enumerate(timeline.events))
+    wall_start = time.monotonic()
+    now = 0.0
+    while now < timeline.end:
+        time.sleep(CLOCK_TICK)
+        now = min(time.monotonic() - wall_start, timeline.end)
+        clock.publish(Clock(clock=rospy.Time.from_sec(now)))
+        while events and events[0][1].time <= now:
+            index, event = events.pop(0)
+            if isinstance(event, Publish) and isinstance(event.message, Float32MultiArray):
+                publisher.publish(event.message)
+            elif isinstance(event, Publish):  # a node may not publish one topic with two types
+                subprocess.run([*wrong_type_command, str(index)], check=True)
+            elif isinstance(event, GoDown):
+                publisher.unregister()
+            elif isinstance(event, ComeUp):
+                publisher = RosTransport().advertise(SIGNAL_TOPIC, Float32MultiArray)
+                if not _connected(publisher):
+                    return 1
+    done = rospy.Publisher(DONE_TOPIC, String, queue_size=1, latch=True)
+    done.publish(String(data="done"))
+    rospy.spin()  # until the launch ends, so the latched messages stay available
+    return 0
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = argparse.ArgumentParser(prog="sound_detection_replay")
+    parser.add_argument("scenario")
+    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
+    parser.add_argument("--wrong-type", type=int, metavar="I", help="publish event I as another node")
+    parser.add_argument("--autonomous", action="store_true", help="play the timeline alone on ROS time")
+    raw = sys.argv[1:] if argv is None else argv
+    arguments = parser.parse_args([word for word in raw if ":=" not in word])
+    base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
+    timeline = build_timeline(load_scenario(arguments.scenario, base))
+    events: List[object] = list(timeline.events)
+    if arguments.wrong_type is not None:
+        _publish_wrong_type(events, arguments.wrong_type)
+        return 0
+    if arguments.autonomous and any(isinstance(e, GoDown) and e.kind == "crash" for e in events):
+        _say(f"error: {arguments.scenario} has a crash outage; replay it with python -m harness run")
+        return 2
+    rospy.init_node("soundDetection", disable_signals=not arguments.autonomous)
+    publisher = RosTransport().advertise(SIGNAL_TOPIC, Float32MultiArray)
+    if not _connected(publisher):
+        return 1
+    if arguments.autonomous:
+        config_arguments = ["-c", arguments.config] if arguments.config else []
+        wrong_type_command = [sys.executable, "-m", "harness.ros_sound_detection", arguments.scenario]
+        return _play_alone(timeline, publisher, [*wrong_type_command, *config_arguments, "--wrong-type"])
+    return _play_stepped(events, publisher)

@@ -1,0 +1,20 @@
+"""For catkin only (catkin_python_setup needs a setup.py); pip reads pyproject.toml."""
+
+from setuptools import setup
+
+try:
+    from catkin_pkg.python_setup import generate_distutils_setup
+except ImportError:  # pip, outside a catkin workspace
+    setup()
+else:
+    setup(
+        **generate_distutils_setup(
+            packages=[
+                "speech_event",
+                "speech_event.adapters",
+                "speech_event.recognizers",
+                "harness",
+                "fixtures",
+            ]
+        )
+    )

@@ -1,0 +1,69 @@
+"""Fixtures for the ros env. rospy is imported here unguarded: in this env a missing ROS is a
+failure, never a skip (tests/ros/ensure_ros_packages.sh installs it)."""
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Dict, Iterator
+
+import pytest
+import rosgraph
+import rospy
+
+from harness.ros_runner import free_port
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def ros_environment(master_port: int, tmp_path: Path) -> Dict[str, str]:
+    environment = dict(os.environ)
+    environment.update(
+        ROS_MASTER_URI=f"http://127.0.0.1:{master_port}",
+        ROS_IP="127.0.0.1",
+        ROS_HOME=str(tmp_path / "ros_home"),
+        ROS_PACKAGE_PATH=str(ROOT),
+        SPEECH_EVENT_PYTHON=sys.executable,
+        PYTHONPATH=str(ROOT),
+    )
+    return environment
+
+
+def wait_for(condition, what: str, timeout: float = 30.0) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"gave up after {timeout:.0f} s waiting for {what}")
+        time.sleep(0.01)
+
+
+def master_answers(uri: str) -> bool:
+    try:
+        rosgraph.Master("/probe", master_uri=uri).getPid()
+        return True
+    except Exception:
+        return False
+
+
+@pytest.fixture(scope="session")
+def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]]:
+    """A roscore of the test session's own on a free port; the test process is a ROS node on it."""
+    port = free_port()
+    environment = ros_environment(port, tmp_path_factory.mktemp("roscore"))
+    core = subprocess.Popen(
+        ["roscore", "-p", str(port)],
+        env=environment,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    try:
+        wait_for(lambda: master_answers(environment["ROS_MASTER_URI"]), "roscore")
+        os.environ.update({k: environment[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME")})
+        rospy.init_node("speechEventTests", disable_signals=True)
+        yield environment
+    finally:
+        rospy.signal_shutdown("tests done")
+        os.killpg(core.pid, 2)
+        core.wait(20)

@@ -1,0 +1,103 @@
+"""Both launch files under roslaunch, found through ROS_PACKAGE_PATH alone (no catkin build)."""
+
+import os
+import signal
+import subprocess
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+from typing import List
+
+import rosgraph
+
+from harness.ros_runner import free_port
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from tests.ros.conftest import ROOT, ros_environment, wait_for
+
+LAUNCH = ROOT / "launch"
+
+
+def _roslaunch(port: int, launch_file: str, *arguments: str) -> List[str]:
+    return ["roslaunch", "-p", str(port), "speech_event", launch_file, *arguments]
+
+
+def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path) -> None:
+    port = free_port()
+    environment = ros_environment(port, tmp_path)
+    launch = subprocess.Popen(
+        _roslaunch(port, "speech_event_launch_robot.launch", "recognizer:=fake"),
+        env=environment,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    try:
+        master = rosgraph.Master("/launchTest", master_uri=environment["ROS_MASTER_URI"])
+
+        def node_is_up() -> bool:
+            try:
+                publishers, subscribers, _ = master.getSystemState()
+            except Exception:
+                return False
+            return [TEXT_TOPIC, ["/speechEvent"]] in publishers and [
+                SIGNAL_TOPIC,
+                ["/speechEvent"],
+            ] in subscribers
+
+        wait_for(node_is_up, "/speechEvent to subscribe and advertise", timeout=60)
+        os.killpg(launch.pid, signal.SIGINT)
+        assert launch.wait(30) == 0
+    finally:
+        if launch.poll() is None:
+            os.killpg(launch.pid, signal.SIGKILL)
+            launch.wait()
+
+
+def _test_harness_launch(tmp_path: Path, scenario: Path) -> str:
+    port = free_port()
+    environment = ros_environment(port, tmp_path)
+    result = subprocess.run(
+        _roslaunch(port, "speech_event_launch_test_harness.launch", f"scenario:={scenario}"),
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
+    return result.stdout
+
+
+def test_the_test_harness_launch_passes_a_scenario_with_an_outage(tmp_path: Path) -> None:
+    scenario = ROOT / "scenarios" / "outage_shutdown.toml"
+    output = _test_harness_launch(tmp_path, scenario)
+    assert (
+        f"PASS  soundDetection shuts down cleanly after speech, then comes back  ({scenario}, 5 messages)"
+        in output
+    )
+
+
+def test_the_test_harness_launch_reports_a_failure_with_its_diff(tmp_path: Path) -> None:
+    scenario = tmp_path / "wrong.toml"
+    scenario.write_text('name = "wrong"\n[[steps]]\nsay = "go left"\n[expect]\npublished = ["go right"]\n')
+    output = _test_harness_launch(tmp_path, scenario)
+    assert f"FAIL  wrong  ({scenario})" in output
+    assert "      -go right\n      +go left\n" in output
+
+
+def test_each_node_type_in_the_launch_files_is_exactly_one_executable_in_the_package_tree() -> None:
+    types = {
+        node.attrib["type"]
+        for launch_file in LAUNCH.glob("*.launch")
+        for node in ElementTree.parse(launch_file).getroot().iter("node")
+    }
+    assert types == {
+        "speech_event_application.py",
+        "speech_event_scenario_node.py",
+        "sound_detection_replay.py",
+        "speech_event_checker.py",
+    }
+    for name in types:
+        found = [
+            path
+            for path in ROOT.rglob(name)
+            if ".tox" not in path.parts and ".git" not in path.parts and os.access(path, os.X_OK)
+        ]
+        assert found == [ROOT / "scripts" / name], name

@@ -1,0 +1,81 @@
+"""python -m harness run --transport ros: every scenario on a real roscore, as in memory."""
+
+import subprocess
+import sys
+from pathlib import Path
+from typing import Dict
+
+import rosgraph
+
+from tests.ros.conftest import ROOT, ros_environment
+
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def _harness(environment: Dict[str, str], *arguments: str) -> "subprocess.CompletedProcess[str]":
+    return subprocess.run(
+        [sys.executable, "-m", "harness", "run", "--transport", "ros", *arguments],
+        cwd=ROOT,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=1200,
+    )
+
+
+def _own_roscore_environment(tmp_path: Path) -> Dict[str, str]:
+    environment = ros_environment(0, tmp_path)
+    del environment["ROS_MASTER_URI"]  # the harness starts its own roscore on a free port
+    return environment
+
+
+def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: Path) -> None:
+    result = _harness(
+        _own_roscore_environment(tmp_path), *[str(path.relative_to(ROOT)) for path in SCENARIOS]
+    )
+    lines = result.stdout.splitlines()
+    assert lines[-1] == f"{len(SCENARIOS)} passed, 0 failed", result.stdout + result.stderr
+    assert [line.split("  ")[0] for line in lines[:-1]] == ["PASS"] * len(SCENARIOS)
+    assert result.returncode == 0
+
+
+def test_a_failing_scenario_on_ros_shows_its_diff_and_exits_1(tmp_path: Path) -> None:
+    wrong = tmp_path / "wrong.toml"
+    wrong.write_text('name = "wrong"\n[[steps]]\nsay = "go left"\n[expect]\npublished = ["go right"]\n')
+    result = _harness(_own_roscore_environment(tmp_path), str(wrong))
+    assert result.returncode == 1
+    assert "      -go right\n      +go left\n" in result.stdout
+    assert "        t=   2.012 s  'go left'\n" in result.stdout  # as in memory: sim time is exact
+
+
+def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) -> None:
+    marker = tmp_path / "ran"
+    wrapper = tmp_path / "other_node.py"
+    wrapper.write_text(
+        "import sys\n"
+        f"open({str(marker)!r}, 'w').write(sys.argv[1])\n"
+        "from speech_event.application import main\n"
+        "sys.exit(main(['-c', sys.argv[1], '--recognizer', 'fake']))\n"
+    )
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        f"{sys.executable} {wrapper} {{config}}",
+        "scenarios/single_utterance.toml",
+    )
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+    assert marker.read_text().endswith("speech_event_configuration.ini")
+
+
+def test_real_time_replay_passes_on_the_wall_clock(tmp_path: Path) -> None:
+    result = _harness(_own_roscore_environment(tmp_path), "--real-time", "scenarios/several_utterances.toml")
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+
+
+def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[str, str]) -> None:
+    rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"]).setParam("/use_sim_time", False)
+    result = _harness(roscore, "scenarios/single_utterance.toml")
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+    assert (
+        rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"]).getParam("/use_sim_time") is True
+    )

@@ -1,0 +1,101 @@
+"""RosTransport and RosClock against a real roscore."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from typing import Dict, List
+
+import numpy as np
+import rosgraph
+
+from speech_event import SIGNAL_TOPIC
+from speech_event.adapters.ros import RosClock, RosTransport
+from speech_event.messages import Float32MultiArray, String
+from speech_event.ports import PublisherStatus
+from tests.ros.conftest import ROOT, wait_for
+
+STAND_IN = [
+    sys.executable,
+    str(ROOT / "scripts" / "sound_detection_replay.py"),
+    str(ROOT / "scenarios" / "single_utterance.toml"),
+]
+
+
+def test_audio_and_text_round_trip_exactly(roscore: Dict[str, str]) -> None:
+    transport = RosTransport()
+    audio: List[object] = []
+    texts: List[object] = []
+    transport.subscribe("/test/audio", Float32MultiArray, audio.append)
+    transport.subscribe("/test/text", String, texts.append)
+    audio_out = transport.advertise("/test/audio", Float32MultiArray)
+    text_out = transport.advertise("/test/text", String)
+    wait_for(lambda: audio_out.connections() > 0 and text_out.connections() > 0, "the connections")
+    block = np.random.default_rng(0).uniform(-1, 1, 4096).astype(np.float32)
+    audio_out.publish(Float32MultiArray(data=block))
+    text_out.publish(String("go to the kitchen"))
+    wait_for(lambda: audio and texts, "both messages")
+    received = audio[0]
+    assert received._type == "std_msgs/Float32MultiArray"  # type: ignore[attr-defined]
+    assert received.data.dtype == np.float32  # type: ignore[attr-defined]
+    assert np.array_equal(received.data, block)  # type: ignore[attr-defined]
+    assert list(received.layout.dim) == []  # type: ignore[attr-defined]
+    assert texts[0].data == "go to the kitchen"  # type: ignore[attr-defined]
+
+
+def _start_stand_in(environment: Dict[str, str]) -> "subprocess.Popen[str]":
+    process = subprocess.Popen(
+        STAND_IN,
+        env=environment,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    assert process.stdout is not None
+    assert process.stdout.readline().strip() == "ready"
+    return process
+
+
+def test_a_sigkilled_publisher_reads_as_stale_then_a_restart_connects_and_a_clean_exit_unregisters(
+    roscore: Dict[str, str],
+) -> None:
+    transport = RosTransport()
+    transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, lambda message: None)
+    assert transport.publisher_status(SIGNAL_TOPIC) is PublisherStatus.NONE
+    first = _start_stand_in(roscore)
+    wait_for(lambda: transport.publisher_status(SIGNAL_TOPIC) is PublisherStatus.CONNECTED, "connected")
+    os.killpg(first.pid, signal.SIGKILL)
+    first.wait()
+    wait_for(lambda: transport.publisher_status(SIGNAL_TOPIC) is PublisherStatus.STALE, "stale")
+    master = rosgraph.Master("/speechEventTests")
+    publishers = {topic: nodes for topic, nodes in master.getSystemState()[0]}
+    assert publishers[SIGNAL_TOPIC] == ["/soundDetection"]  # the killed node is still registered
+    second = _start_stand_in(roscore)
+    wait_for(lambda: transport.publisher_status(SIGNAL_TOPIC) is PublisherStatus.CONNECTED, "reconnected")
+    assert second.stdin is not None
+    second.stdin.write("shutdown\n")
+    second.stdin.flush()
+    assert second.wait(20) == 0
+    wait_for(lambda: transport.publisher_status(SIGNAL_TOPIC) is PublisherStatus.NONE, "unregistered")
+
+
+def test_the_ros_clock_runs_timers_on_ros_time_and_cancels_them(roscore: Dict[str, str]) -> None:
+    clock = RosClock()
+    fired = threading.Event()
+    cancelled = threading.Event()
+    start = clock.now()
+    clock.call_at(start + 0.2, fired.set)
+    clock.call_at(start + 0.1, cancelled.set).cancel()
+    assert fired.wait(5)
+    assert clock.now() >= start + 0.2 - 1e-3
+    time.sleep(0.2)
+    assert not cancelled.is_set()
+
+
+def test_every_script_names_the_system_python_so_a_pyenv_python3_cannot_break_rospy() -> None:
+    for script in sorted((ROOT / "scripts").iterdir()):
+        assert script.read_text().startswith("#!/usr/bin/python3\n"), script
+        assert os.access(script, os.X_OK), script
