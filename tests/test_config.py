@@ -184,15 +184,27 @@ def test_a_formatted_configuration_reads_back_the_same(
     assert parse_config(format_config(config)) == config
 
 
-def test_the_deployment_node_refuses_a_bad_configuration_with_status_2_before_touching_ros(tmp_path: Path) -> None:
+def test_the_deployment_node_refuses_a_bad_configuration_with_status_2_before_touching_ros(
+    tmp_path: Path,
+) -> None:
     bad = tmp_path / "robot.ini"
     bad.write_text("verboseMode maybe\n")
     result = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "speech_event_application.py"), "-c", str(bad), "--recognizer", "fake"],
+        [
+            sys.executable,
+            str(ROOT / "scripts" / "speech_event_application.py"),
+            "-c",
+            str(bad),
+            "--recognizer",
+            "fake",
+        ],
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
         capture_output=True,
         text=True,
     )
     assert result.returncode == 2
-    assert result.stderr == f"error: {bad}:1: key 'verbose_mode': value 'maybe' is not a boolean; allowed: true or false\n"
+    assert (
+        result.stderr
+        == f"error: {bad}:1: key 'verbose_mode': value 'maybe' is not a boolean; allowed: true or false\n"
+    )

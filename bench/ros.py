@@ -1,0 +1,172 @@
+"""Figures on a real roscore (python -m bench.ros, in the tox env ros or a venv that sees rospy).
+
+Targets, from the issue: last block of an utterance to its text at a subscriber, minus
+speech_pause_period, at most 20 ms with the fake recognizer; blocks lost in a burst of 1000: 0.
+Also the per-block cost including the conversion of the ROS message to numpy.
+"""
+
+import contextlib
+import io
+import os
+import statistics
+import sys
+import tempfile
+import time
+import xmlrpc.client
+from pathlib import Path
+from typing import Any, Callable, List
+
+import numpy as np
+import rosgraph
+import rospy
+from rospy.numpy_msg import numpy_msg
+from std_msgs import msg as std_msgs
+
+from fixtures.audio import noise, speak_tones
+from harness.ros_runner import NODE_SCRIPT, Processes, free_port
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.adapters.executors import ClockExecutor
+from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.adapters.ros import RosTransport
+from speech_event.config import SpeechEventConfig
+from speech_event.messages import Float32MultiArray, String
+from speech_event.node import SpeechEventNode
+from speech_event.recognizers.tones import ToneRecognizer
+
+BLOCK = 4096
+RATE = 48000
+
+
+def _wait(condition: Callable[[], bool], timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError("the benchmark's ROS graph did not come up")
+        time.sleep(0.002)
+
+
+def per_block_cost(blocks: int = 5000) -> None:
+    """Deserializing a 4096-float message and handling it, without the network."""
+    buffer = io.BytesIO()
+    samples = np.random.default_rng(0).uniform(-0.5, 0.5, BLOCK).astype(np.float32)
+    std_msgs.Float32MultiArray(data=samples.tolist()).serialize(buffer)
+    wire = buffer.getvalue()
+    clock, bus = FakeClock(), InMemoryBus()
+    node = SpeechEventNode(SpeechEventConfig(), bus, clock, ToneRecognizer(), ClockExecutor(clock))
+    bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    deserializers = (
+        ("numpy_msg", numpy_msg(std_msgs.Float32MultiArray)),
+        ("plain", std_msgs.Float32MultiArray),
+    )
+    for label, message_class in deserializers:
+        costs: List[float] = []
+        for _ in range(blocks):
+            clock.advance(BLOCK / RATE)
+            start = time.perf_counter()
+            node.on_signal(message_class().deserialize(wire))
+            costs.append(time.perf_counter() - start)
+        costs.sort()
+        print(
+            f"block with conversion ({label} deserializer): {statistics.mean(costs) * 1e3:.4f} ms mean, "
+            f"{costs[int(len(costs) * 0.99)] * 1e3:.4f} ms p99 over {blocks} blocks"
+        )
+
+
+def _received(node_uri: str) -> int:
+    stats: Any = xmlrpc.client.ServerProxy(node_uri).getBusStats("/bench")
+    return sum(int(c[2]) for topic, connections in stats[2][1] if topic == SIGNAL_TOPIC for c in connections)
+
+
+def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
+    work = Path(tempfile.mkdtemp(prefix="speech_event_bench_"))
+    port = free_port()
+    environment = dict(
+        os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1", ROS_HOME=str(work)
+    )
+    os.environ.update(environment)
+    processes = Processes(environment, work)
+    try:
+        processes.start("roscore", ["roscore", "-p", str(port)])
+        master = rosgraph.Master("/bench")
+        _wait(lambda: _answers(master))
+        config = SpeechEventConfig()
+        (work / "config.ini").write_text("")
+        node_command = [
+            sys.executable,
+            str(NODE_SCRIPT),
+            "-c",
+            str(work / "config.ini"),
+            "--recognizer",
+            "fake",
+        ]
+        processes.start("node", node_command)
+        rospy.init_node("soundDetection", disable_signals=True)
+        transport = RosTransport()
+        arrivals: List[float] = []
+        texts: List[str] = []
+
+        def on_text(message: object) -> None:
+            arrivals.append(time.perf_counter())
+            texts.append(message.data)  # type: ignore[attr-defined]
+
+        transport.subscribe(TEXT_TOPIC, String, on_text)
+        signal = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
+        _wait(
+            lambda: signal.connections() > 0 and transport._subscribers[TEXT_TOPIC].get_num_connections() > 0
+        )
+        node_uri = str(master.lookupNode("/speechEvent"))
+
+        latencies: List[float] = []
+        spoken = speak_tones("go to the kitchen", RATE)
+        padded = np.zeros(-(-spoken.size // BLOCK) * BLOCK, dtype=np.float32)
+        padded[: spoken.size] = spoken
+        for _ in range(utterances):
+            count = len(texts)
+            for block in padded.reshape(-1, BLOCK):
+                time.sleep(BLOCK / RATE)  # as soundDetection: a block when it has been recorded
+                signal.publish(Float32MultiArray(data=block))
+                last_block = time.perf_counter()
+            _wait(_more_than(texts, count), timeout=10)
+            latencies.append(arrivals[-1] - last_block - config.speech_pause_period)
+        assert texts == ["go to the kitchen"] * utterances, texts
+        print(
+            f"roscore: last block to text minus the {config.speech_pause_period} s pause: "
+            f"{statistics.median(latencies) * 1e3:.1f} ms median, {max(latencies) * 1e3:.1f} ms max "
+            f"over {utterances} utterances, fake recognizer (target <= 20 ms)"
+        )
+
+        before = _received(node_uri)
+        quiet = noise(BLOCK * burst, -40.0, np.random.default_rng(1)).reshape(burst, BLOCK)
+        start = time.perf_counter()
+        for block in quiet:
+            signal.publish(Float32MultiArray(data=block))
+        sent = time.perf_counter() - start
+        with contextlib.suppress(TimeoutError):  # what did not arrive in 30 s is counted as lost
+            _wait(lambda: _received(node_uri) - before >= burst, timeout=30)
+        received = _received(node_uri) - before
+        print(
+            f"roscore: burst of {burst} blocks published in {sent * 1e3:.0f} ms: "
+            f"{received} received by the node, {burst - received} lost (target 0)"
+        )
+    finally:
+        rospy.signal_shutdown("bench done")
+        processes.stop_all()
+
+
+def _more_than(texts: List[str], count: int) -> Callable[[], bool]:
+    return lambda: len(texts) > count
+
+
+def _answers(master: rosgraph.Master) -> bool:
+    try:
+        master.getPid()
+        return True
+    except Exception:
+        return False
+
+
+if __name__ == "__main__":
+    per_block_cost()
+    on_roscore()
