@@ -13,6 +13,7 @@ from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_sce
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 
 USAGE_ERROR = 2
+INTERRUPTED = 130
 
 
 def _base_config(path: Optional[str]) -> SpeechEventConfig:
@@ -94,3 +95,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     except ReplayError as problem:
         print(f"error: the replay could not go on: {problem}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # every process the replay started has been stopped by now
+        print("interrupted", file=sys.stderr)
+        return INTERRUPTED

@@ -202,7 +202,11 @@ def test_tones_in_blocks_at_48k_come_out_as_text() -> None:
 def test_shutdown_abandons_a_recognition_that_outlasts_the_grace_period() -> None:
     recognizer = GatedRecognizer()
     executor = ThreadExecutor()
-    executor.submit(lambda: recognizer.transcribe(np.zeros(1, dtype=np.float32)))
+
+    def recognize() -> None:
+        recognizer.transcribe(np.zeros(1, dtype=np.float32))
+
+    executor.submit(recognize)
     assert recognizer.started.wait(10)
     assert executor.shutdown(timeout=0.1) is False  # still running: abandoned (a daemon thread)
     recognizer.gate.set()

@@ -1,9 +1,11 @@
 """python -m harness run --transport ros: every scenario on a real roscore, as in memory."""
 
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
-from typing import Dict
+from typing import Dict, Set
 
 import rosgraph
 
@@ -79,3 +81,52 @@ def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[s
     assert (
         rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"]).getParam("/use_sim_time") is True
     )
+
+
+def _descendants(pid: int) -> Set[int]:
+    """Every live process below ``pid``, read from /proc."""
+    parents: Dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents[int(stat.parent.name)] = int(fields[1])
+    found: Set[int] = set()
+    frontier = {pid}
+    while frontier:
+        children = {child for child, parent in parents.items() if parent in frontier}
+        found |= children
+        frontier = children
+    return found
+
+
+def test_ctrl_c_stops_every_process_the_replay_started(tmp_path: Path) -> None:
+    harness = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "harness",
+            "run",
+            "--transport",
+            "ros",
+            "scenarios/silence_is_not_an_outage.toml",
+        ],
+        cwd=ROOT,
+        env=_own_roscore_environment(tmp_path),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    started: Set[int] = set()
+    deadline = time.monotonic() + 60
+    while len(started) < 3 and time.monotonic() < deadline:  # roscore's, the node, soundDetection
+        started |= _descendants(harness.pid)
+        time.sleep(0.05)
+    assert len(started) >= 3
+    harness.send_signal(signal.SIGINT)
+    _, stderr = harness.communicate(timeout=60)
+    assert harness.returncode == 130
+    assert stderr.endswith("interrupted\n")
+    alive = {pid for pid in started if Path(f"/proc/{pid}").exists()}
+    assert alive == set()

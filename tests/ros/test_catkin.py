@@ -1,0 +1,31 @@
+"""catkin_make installs the package in a robot workspace."""
+
+import shutil
+import subprocess
+from pathlib import Path
+
+from tests.ros.conftest import ROOT
+
+
+def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tmp_path: Path) -> None:
+    source = tmp_path / "src" / "speech_event"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", ".tox", "*.egg-info", "__pycache__"))
+    # The pyenv python3 first on PATH has no catkin_pkg: name the system Python, as on the robot.
+    result = subprocess.run(
+        ["catkin_make", "-C", str(tmp_path), "install", "-DPYTHON_EXECUTABLE=/usr/bin/python3"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    install = tmp_path / "install"
+    for script in ("speech_event_application.py", "sound_detection_replay.py", "speech_event_checker.py"):
+        installed = install / "lib" / "speech_event" / script
+        assert installed.read_text().startswith("#!/usr/bin/python3\n"), script
+    share = install / "share" / "speech_event"
+    assert (share / "launch" / "speech_event_launch_robot.launch").is_file()
+    assert (share / "config" / "speech_event_configuration.ini").is_file()
+    library = install / "lib" / "python3" / "dist-packages"
+    assert (library / "speech_event" / "node.py").is_file()
+    assert (library / "speech_event" / "adapters" / "ros.py").is_file()
