@@ -1,0 +1,164 @@
+"""Plain ``key value`` configuration files, read into a frozen dataclass.
+
+A line is ``key value`` (tabs or spaces, as in the robot's files) or ``key = value``; ``#`` starts a
+comment at the line start or after white space (so paths may hold '#'); a key alone sets the empty
+value. Every key may also be spelled in camelCase (``sampleRate``), as the robot's later release
+does. A bad file gets one ``ConfigError`` naming the file, line, key, bad value and what is allowed.
+"""
+
+import dataclasses
+import difflib
+import re
+from pathlib import Path
+from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Type, TypeVar, Union
+
+
+class ConfigError(Exception):
+    """A configuration that cannot be used; the message says where and what is allowed."""
+
+
+class KeyRule(NamedTuple):
+    parse: Callable[[object], object]
+    allowed: str
+
+
+def text(value: object) -> str:
+    if not isinstance(value, str):
+        raise ValueError("is not text")
+    return value
+
+
+def boolean(value: object) -> bool:
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.lower() in ("true", "false"):
+        return value.lower() == "true"
+    raise ValueError("is not a boolean")
+
+
+def choice(*options: str) -> Callable[[object], object]:
+    def parse(value: object) -> str:
+        if isinstance(value, str) and value.lower() in options:
+            return value.lower()
+        raise ValueError("is not one of the choices")
+
+    return parse
+
+
+_NUMBER_PATTERNS = {int: r"[-+]?\d+", float: r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"}
+
+
+def number(kind: type, low: float, high: float) -> Callable[[object], object]:
+    def parse(value: object) -> Union[int, float]:
+        not_a_number = ValueError("is not " + ("an integer" if kind is int else "a number"))
+        if isinstance(value, str):
+            if not re.fullmatch(_NUMBER_PATTERNS[kind], value):
+                raise not_a_number  # float() would also take 'nan' and 'inf'
+            parsed: Union[int, float] = kind(value)
+        elif (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or (kind is int and isinstance(value, float))
+        ):
+            raise not_a_number
+        else:
+            parsed = kind(value)
+        if not low <= parsed <= high:
+            raise ValueError("is out of range")
+        return parsed
+
+    return parse
+
+
+def seconds(low: float, high: float) -> KeyRule:
+    return KeyRule(number(float, low, high), f"a number of seconds from {low} to {high}")
+
+
+def _camel_case(key: str) -> str:
+    return re.sub(r"_([a-z])", lambda match: match.group(1).upper(), key)
+
+
+# A key alone sets it to the empty value: how a file says "no path".
+_LINE = re.compile(r"^(?P<key>[A-Za-z_][A-Za-z0-9_]*)(?:(?:\s*=\s*|\s+)(?P<value>.*))?$")
+
+Config = TypeVar("Config")
+
+
+class KeyValueFormat(Generic[Config]):
+    """How the keys of one dataclass are written in a file, and checked."""
+
+    def __init__(self, config_type: Type[Config], rules: Dict[str, KeyRule]) -> None:
+        fields = {field.name for field in dataclasses.fields(config_type)}  # type: ignore[arg-type]
+        assert set(rules) == fields, "every field needs a rule, and every rule a field"
+        self._type = config_type
+        self._rules = rules
+        # Every spelling a file may use, mapped to the field it sets.
+        self._spellings: Dict[str, str] = {}
+        for key in rules:
+            self._spellings[key] = key
+            self._spellings[_camel_case(key)] = key
+
+    def _unknown_key(self, where: str, key: str) -> ConfigError:
+        close = difflib.get_close_matches(key, list(self._spellings), n=1, cutoff=0.6)
+        hint = f"did you mean '{close[0]}'? " if close else ""
+        return ConfigError(f"{where}: unknown key '{key}': {hint}known keys are {', '.join(self._rules)}")
+
+    def _value(self, key: str, raw: object, where: str) -> object:
+        rule = self._rules[key]
+        try:
+            return rule.parse(raw)
+        except ValueError as problem:
+            raise ConfigError(
+                f"{where}: key '{key}': value {raw!r} {problem}; allowed: {rule.allowed}"
+            ) from None
+
+    def apply_overrides(self, base: Config, overrides: Mapping[str, object], source: str) -> Config:
+        """``base`` with ``overrides`` (already typed, as from TOML) checked and applied."""
+        values: Dict[str, Any] = {}
+        for spelling, raw in overrides.items():
+            if spelling not in self._spellings:
+                raise self._unknown_key(source, spelling)
+            values[self._spellings[spelling]] = self._value(self._spellings[spelling], raw, source)
+        return dataclasses.replace(base, **values)  # type: ignore[type-var]
+
+    def parse(self, content: str, source: str) -> Config:
+        """Parse the text of a file; keys it does not set keep their defaults."""
+        values: Dict[str, Any] = {}
+        first_line: Dict[str, int] = {}
+        for line_number, line in enumerate(content.splitlines(), start=1):
+            setting = re.split(r"(?:^|\s)#", line, maxsplit=1)[0].strip()
+            if not setting:
+                continue
+            where = f"{source}:{line_number}"
+            match = _LINE.match(setting)
+            if match is None:
+                raise ConfigError(f"{where}: cannot read {setting!r}; expected 'key value' or 'key = value'")
+            spelling, raw = match.group("key"), (match.group("value") or "").strip()
+            if spelling not in self._spellings:
+                raise self._unknown_key(where, spelling)
+            key = self._spellings[spelling]
+            if key in first_line:
+                first = first_line[key]
+                raise ConfigError(
+                    f"{where}: key '{key}' is set again (first set on line {first}); set each key once"
+                )
+            first_line[key] = line_number
+            values[key] = self._value(key, raw, where)
+        return self._type(**values)
+
+    def load(self, path: Union[str, Path]) -> Config:
+        try:
+            content = Path(path).read_text(encoding="utf-8")
+        except OSError as problem:
+            raise ConfigError(f"{path}: cannot read the configuration file: {problem.strerror}") from None
+        except UnicodeDecodeError:
+            raise ConfigError(f"{path}: the configuration file is not UTF-8 text") from None
+        return self.parse(content, str(path))
+
+    def format(self, config: Config) -> str:
+        """The text of a file that ``parse`` reads back as ``config``."""
+
+        def written(value: object) -> str:
+            return str(value).lower() if isinstance(value, bool) else str(value)
+
+        return "".join(f"{key} {written(getattr(config, key))}\n" for key in self._rules)
