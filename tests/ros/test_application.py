@@ -5,11 +5,17 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Dict
+import wave
+from pathlib import Path
+from typing import Dict, List
 
+import numpy as np
 import rosgraph
+import rospy
+from std_msgs import msg as std_msgs
 
-from speech_event import SIGNAL_TOPIC
+from fixtures.audio import speak_tones
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
 from tests.ros.conftest import ROOT, wait_for
 
@@ -39,3 +45,47 @@ def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(roscore: Dict[str
         if node.poll() is None:
             os.killpg(node.pid, signal.SIGKILL)
             node.wait()
+
+
+def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
+    roscore: Dict[str, str], tmp_path: Path
+) -> None:
+    rate = 48000
+    silence = np.zeros(rate, dtype=np.float32)
+    session = np.concatenate([silence, speak_tones("open the door", rate), silence])
+    wav_path = tmp_path / "session.wav"
+    with wave.open(str(wav_path), "wb") as wav:
+        wav.setnchannels(1)
+        wav.setsampwidth(2)
+        wav.setframerate(rate)
+        wav.writeframes(np.round(session * 32767).astype("<i2").tobytes())
+    texts: List[str] = []
+    subscriber = rospy.Subscriber(TEXT_TOPIC, std_msgs.String, lambda message: texts.append(message.data))
+    node = subprocess.Popen(
+        [sys.executable, str(ROOT / "scripts" / "speech_event_application.py"), "--recognizer", "fake"],
+        env=roscore,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    try:
+        wait_for(lambda: subscriber.get_num_connections() > 0, "the node's text publisher", 60)
+        driver = subprocess.run(
+            [
+                sys.executable,
+                str(ROOT / "scripts" / "speech_event_driver.py"),
+                "-c",
+                str(ROOT / "config" / "speech_event_driver.ini"),
+                str(wav_path),
+            ],
+            env=roscore,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert driver.returncode == 0, driver.stderr
+        wait_for(lambda: texts == ["open the door"], "the text", 10)
+    finally:
+        subscriber.unregister()
+        os.killpg(node.pid, signal.SIGINT)
+        node.wait(20)
