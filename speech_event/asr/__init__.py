@@ -1,0 +1,1 @@
+"""The NeMo conformer-transducer engine: features, ONNX model, greedy decoding, vocabulary."""

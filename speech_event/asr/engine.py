@@ -1,0 +1,50 @@
+"""The NeMo conformer-transducer recognizer: features -> encoder -> greedy RNN-T -> vocabulary."""
+
+from pathlib import Path
+from typing import Union
+
+import numpy as np
+
+from speech_event.asr.errors import ModelError
+from speech_event.asr.features import features
+from speech_event.asr.greedy import greedy_decode
+from speech_event.asr.manifest import MANIFEST_FILE, load_manifest
+from speech_event.asr.model import TransducerModel
+from speech_event.asr.vocabulary import load_vocabulary
+from speech_event.ports import Transcript
+
+VOCABULARY_FILE = "vocab.txt"
+
+
+class NemoTransducerRecognizer:
+    def __init__(self, model_directory: Union[str, Path], cuda: bool = False) -> None:
+        directory = Path(model_directory)
+        if directory.suffix == ".nemo":
+            raise ModelError(
+                f"{directory} is a .nemo archive, not an exported model directory: export it once with "
+                f"'speech-event export-nemo {directory} OUT_DIR' (needs the 'export' extra: nemo_toolkit), "
+                "then give OUT_DIR"
+            )
+        if not directory.is_dir():
+            raise ModelError(f"{directory}: no such model directory")
+        self._manifest = load_manifest(directory / MANIFEST_FILE)
+        self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
+        self._model = TransducerModel(directory, cuda)
+
+    @property
+    def sample_rate(self) -> int:
+        return self._manifest.features.sample_rate
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        inputs = features(audio, self._manifest.features)
+        if inputs.shape[1] == 0:
+            return Transcript("")
+        frames = self._model.encode(inputs)
+        tokens = greedy_decode(
+            frames,
+            self._model.step,
+            self._model.initial_state(),
+            self._vocabulary.blank,
+            self._manifest.max_symbols_per_step,
+        )
+        return Transcript(self._vocabulary.text(tokens))

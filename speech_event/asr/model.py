@@ -1,0 +1,122 @@
+"""The two ONNX files of NeMo's transducer export, run with onnxruntime.
+
+``encoder-model.onnx``: ``audio_signal`` float32 [B, features, T] and ``length`` int64 [B] ->
+``outputs`` [B, D, T'] and ``encoded_lengths`` [B].
+``decoder_joint-model.onnx``: ``encoder_outputs`` [B, D, 1], ``targets`` int32 [B, 1],
+``target_length`` int32 [B], ``input_states_1`` and ``input_states_2`` (LSTM h and c, [layers, B,
+hidden]) -> ``outputs`` (logits, last dimension V + 1), ``prednet_lengths``, ``output_states_1``,
+``output_states_2``.
+"""
+
+import logging
+from pathlib import Path
+from typing import Dict, List, Sequence, Tuple
+
+import numpy as np
+import onnxruntime
+
+from speech_event.asr.errors import ModelError
+
+_LOG = logging.getLogger("speech_event")
+
+ENCODER_FILE = "encoder-model.onnx"
+DECODER_JOINT_FILE = "decoder_joint-model.onnx"
+ENCODER_INPUTS = {"audio_signal": 3, "length": 1}
+ENCODER_OUTPUTS = {"outputs": 3, "encoded_lengths": 1}
+DECODER_INPUTS = {
+    "encoder_outputs": 3,
+    "targets": 2,
+    "target_length": 1,
+    "input_states_1": 3,
+    "input_states_2": 3,
+}
+DECODER_OUTPUTS = {"outputs": -1, "prednet_lengths": -1, "output_states_1": 3, "output_states_2": 3}
+
+LstmState = Tuple[np.ndarray, np.ndarray]
+
+
+def providers(cuda: bool) -> List[str]:
+    """CUDA when asked for and onnxruntime has it; otherwise the CPU, with a warning if CUDA was asked for."""
+    if not cuda:
+        return ["CPUExecutionProvider"]
+    if "CUDAExecutionProvider" in onnxruntime.get_available_providers():
+        return ["CUDAExecutionProvider", "CPUExecutionProvider"]
+    _LOG.warning("cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU")
+    return ["CPUExecutionProvider"]
+
+
+def _describe(expected: Dict[str, int]) -> str:
+    return ", ".join(f"{name} ({rank}-D)" if rank > 0 else name for name, rank in expected.items())
+
+
+def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected: Dict[str, int]) -> None:
+    shapes = {arg.name: arg.shape for arg in found}
+    missing = [name for name in expected if name not in shapes]
+    wrong_rank = [
+        f"{name} is {len(shapes[name])}-D"
+        for name, rank in expected.items()
+        if name in shapes and rank > 0 and len(shapes[name]) != rank
+    ]
+    if missing or wrong_rank:
+        problem = f"missing {', '.join(missing)}" if missing else "; ".join(wrong_rank)
+        raise ModelError(
+            f"{path}: {kind} are {sorted(shapes)} ({problem}); "
+            f"a NeMo transducer export has {_describe(expected)}"
+        )
+
+
+def _session(path: Path, execution_providers: List[str]) -> onnxruntime.InferenceSession:
+    if not path.is_file():
+        raise ModelError(
+            f"{path.parent}: missing {path.name}; a model directory holds {ENCODER_FILE}, "
+            f"{DECODER_JOINT_FILE}, vocab.txt and config.json "
+            "(speech-event export-nemo MODEL.nemo DIR writes one)"
+        )
+    options = onnxruntime.SessionOptions()
+    options.log_severity_level = 3
+    try:
+        return onnxruntime.InferenceSession(str(path), options, providers=execution_providers)
+    except Exception as problem:  # onnxruntime raises its own exception types
+        raise ModelError(f"{path}: onnxruntime cannot load it: {problem}") from None
+
+
+class TransducerModel:
+    def __init__(self, directory: Path, cuda: bool) -> None:
+        encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_JOINT_FILE
+        execution_providers = providers(cuda)  # decided once, so a missing CUDA is said once
+        self._encoder = _session(encoder_path, execution_providers)
+        self._decoder_joint = _session(decoder_path, execution_providers)
+        _check(encoder_path, "inputs", self._encoder.get_inputs(), ENCODER_INPUTS)
+        _check(encoder_path, "outputs", self._encoder.get_outputs(), ENCODER_OUTPUTS)
+        _check(decoder_path, "inputs", self._decoder_joint.get_inputs(), DECODER_INPUTS)
+        _check(decoder_path, "outputs", self._decoder_joint.get_outputs(), DECODER_OUTPUTS)
+        states = {arg.name: arg.shape for arg in self._decoder_joint.get_inputs()}
+        self._state_shapes = [states["input_states_1"], states["input_states_2"]]
+
+    def encode(self, features: np.ndarray) -> np.ndarray:
+        """[features, T] -> encoder frames [T', D]."""
+        outputs, lengths = self._encoder.run(
+            ["outputs", "encoded_lengths"],
+            {
+                "audio_signal": features[None].astype(np.float32),
+                "length": np.array([features.shape[1]], np.int64),
+            },
+        )
+        return np.asarray(outputs[0, :, : int(lengths[0])].T)
+
+    def initial_state(self) -> LstmState:
+        h, c = (np.zeros((int(shape[0]), 1, int(shape[2])), dtype=np.float32) for shape in self._state_shapes)
+        return h, c
+
+    def step(self, frame: np.ndarray, last_token: int, state: LstmState) -> Tuple[np.ndarray, LstmState]:
+        logits, h, c = self._decoder_joint.run(
+            ["outputs", "output_states_1", "output_states_2"],
+            {
+                "encoder_outputs": frame[None, :, None].astype(np.float32),
+                "targets": np.array([[last_token]], dtype=np.int32),
+                "target_length": np.array([1], dtype=np.int32),
+                "input_states_1": state[0],
+                "input_states_2": state[1],
+            },
+        )
+        return np.asarray(logits).reshape(-1), (h, c)
