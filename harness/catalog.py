@@ -7,6 +7,7 @@ from typing import Callable, Dict, Optional
 import numpy as np
 
 from fixtures.audio import speak_tones
+from fixtures.tts import speak_tts
 from speech_event.recognizers import RECOGNIZERS
 
 
@@ -29,6 +30,9 @@ class Voice:
         return None
 
 
-VOICES: Dict[str, Voice] = {"tones": Voice(speak_tones, "[a-z' ]")}
+VOICES: Dict[str, Voice] = {
+    "tones": Voice(speak_tones, "[a-z' ]"),
+    "tts": Voice(speak_tts, "[A-Za-z0-9',.?! -]"),
+}
 
 __all__ = ["RECOGNIZERS", "VOICES", "Voice"]

@@ -1,17 +1,21 @@
 """``python -m harness``: replay scenario files, or run the demo."""
 
 import argparse
+import dataclasses
 import logging
 import sys
 from contextlib import ExitStack
+from pathlib import Path
 from typing import Callable, List, Optional
 
-from harness.catalog import VOICES
+from harness.catalog import RECOGNIZERS, VOICES
 from harness.memory_runner import Published, run_in_memory
 from harness.report import passed, report
 from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
+from speech_event.asr.errors import ModelError
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 
+COMMANDS = Path(__file__).resolve().parents[1] / "config" / "robot_commands.txt"
 USAGE_ERROR = 2
 INTERRUPTED = 130
 
@@ -47,21 +51,36 @@ def _run(arguments: argparse.Namespace) -> int:
 
 def _demo(arguments: argparse.Namespace) -> int:
     config = _base_config(arguments.config)
-    problem = VOICES["tones"].problem_with(arguments.text)
+    uses_pocketsphinx = arguments.recognizer in ("auto", "pocketsphinx") and not config.en_model_path
+    if (
+        uses_pocketsphinx
+        and arguments.grammar
+        and not (config.pocketsphinx_grammar or config.pocketsphinx_keywords)
+    ):
+        config = dataclasses.replace(config, pocketsphinx_grammar=arguments.grammar)
+    problem = VOICES[arguments.voice].problem_with(arguments.text)
     if problem:
-        raise ScenarioError(f"demo text {arguments.text!r}: the tones voice {problem}")
+        raise ScenarioError(f"demo text {arguments.text!r}: the {arguments.voice} voice {problem}")
     scenario = Scenario(
         name="demo",
         source="demo",
         config=config,
         steps=(Say(arguments.text),),
         expected=(arguments.text,),
+        voice=arguments.voice,
+        recognizer=arguments.recognizer,
     )
+    mode = f", grammar {config.pocketsphinx_grammar}" if config.pocketsphinx_grammar else ""
     print(
         f"soundDetection says {arguments.text!r} "
-        f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)"
+        f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)\n"
+        f"speechEvent transcribes with {scenario.recognizer}{mode}"
     )
-    for message in run_in_memory(scenario):
+    try:
+        published = run_in_memory(scenario)
+    except ModelError as model_problem:
+        raise ConfigError(str(model_problem)) from None
+    for message in published:
         print(f"/speechEvent/text at t={message.time:.3f} s: {message.text!r}")
     return 0
 
@@ -84,6 +103,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     demo = commands.add_parser("demo", help="speech in, text out: the node on the in-memory bus")
     demo.add_argument("text", nargs="?", default="go to the kitchen")
     demo.add_argument("-c", "--config", help="configuration file (default: embedded defaults)")
+    demo.add_argument("--voice", choices=sorted(VOICES), default="tts", help="default: tts (espeak-ng)")
+    demo.add_argument("--recognizer", choices=sorted(RECOGNIZERS), default="auto", help="default: auto")
+    demo.add_argument(
+        "--grammar",
+        default=str(COMMANDS),
+        help="command grammar for pocketsphinx when the config sets none (default: the robot's commands); "
+        "'' for its language model",
+    )
     demo.set_defaults(handler=_demo)
     arguments = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")

@@ -39,7 +39,9 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[
         ),
     )
     executor = ClockExecutor(clock, recognition_seconds)
-    node = SpeechEventNode(scenario.config, bus, clock, RECOGNIZERS[scenario.recognizer](), executor)
+    node = SpeechEventNode(
+        scenario.config, bus, clock, RECOGNIZERS[scenario.recognizer](scenario.config), executor
+    )
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     node.start()
     for event in timeline.events:

@@ -6,7 +6,7 @@ import sys
 from typing import List, Optional
 
 from harness.scenario import ScenarioError, load_scenario
-from speech_event.application import run
+from speech_event.application import build_recognizer, run
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 
 
@@ -19,8 +19,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
         scenario = load_scenario(arguments.scenario, base)
+        recognizer = build_recognizer(scenario.config, scenario.recognizer)
     except (ConfigError, ScenarioError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(scenario.config, scenario.recognizer)
+    run(scenario.config, recognizer)
     return 0

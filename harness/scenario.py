@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
 from harness.catalog import RECOGNIZERS, VOICES
-from speech_event.config import ConfigError, SpeechEventConfig, apply_overrides
+from speech_event.config import PATH_KEYS, ConfigError, SpeechEventConfig, apply_overrides
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -163,8 +163,12 @@ def _step(table: Any, where: str) -> Step:
 
 def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEventConfig) -> Scenario:
     top = _Reader(document, source, _TOP_KEYS)
+    overrides = dict(top.get("config", dict, {}))
+    for key in PATH_KEYS:  # a scenario's files are found next to it, wherever it is run from
+        if isinstance(overrides.get(key), str) and overrides[key]:
+            overrides[key] = str(Path(source).parent / overrides[key])
     try:
-        config = apply_overrides(base_config, top.get("config", dict, {}), source + ": [config]")
+        config = apply_overrides(base_config, overrides, source + ": [config]")
     except ConfigError as config_error:
         raise ScenarioError(str(config_error)) from None
     steps_table = top.get("steps", list)

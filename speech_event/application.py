@@ -1,7 +1,8 @@
 """The deployment node: ``speech-event -c CONFIG`` (or scripts/speech_event_application.py).
 
-Reads the configuration before touching ROS, so a bad file stops it with status 2 and one clear
-message. On SIGINT it stops its timers and gives the running recognition 2 s to finish.
+Reads the configuration and loads the speech engine before touching ROS, so a bad file, model or
+grammar stops it with status 2 and one clear message. On SIGINT it stops its timers and gives the
+running recognition 2 s to finish.
 """
 
 import argparse
@@ -10,7 +11,9 @@ import sys
 from pathlib import Path
 from typing import List, Optional
 
+from speech_event.asr.errors import ModelError
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
+from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS
 
 NODE_NAME = "speechEvent"
@@ -24,13 +27,22 @@ def _arguments(argv: List[str]) -> argparse.Namespace:
     parser.add_argument(
         "--recognizer",
         choices=sorted(RECOGNIZERS),
-        required=True,
-        help="speech engine; 'fake' decodes the tones voice (scenario replay)",
+        default="auto",
+        help="speech engine (default auto: the NeMo model of the language when its path is set, else "
+        "pocketsphinx for English); 'fake' decodes the tones voice (scenario replay)",
     )
     return parser.parse_args(argv)
 
 
-def run(config: SpeechEventConfig, recognizer_name: str) -> None:
+def build_recognizer(config: SpeechEventConfig, name: str) -> Recognizer:
+    """The engine, or ConfigError with what is wrong with its model or grammar."""
+    try:
+        return RECOGNIZERS[name](config)
+    except ModelError as problem:
+        raise ConfigError(str(problem)) from None
+
+
+def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
     import rospy  # only the ROS entry point needs it
 
     from speech_event.adapters.executors import ThreadExecutor
@@ -43,7 +55,7 @@ def run(config: SpeechEventConfig, recognizer_name: str) -> None:
     logger.setLevel(logging.INFO if config.verbose_mode else logging.WARNING)
     logger.propagate = False
     executor = ThreadExecutor()
-    node = SpeechEventNode(config, RosTransport(), RosClock(), RECOGNIZERS[recognizer_name](), executor)
+    node = SpeechEventNode(config, RosTransport(), RosClock(), recognizer, executor)
     node.start()
     rospy.spin()
     node.stop()
@@ -57,8 +69,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     arguments = _arguments([word for word in raw if ":=" not in word])
     try:
         config = load_config(arguments.config)
+        recognizer = build_recognizer(config, arguments.recognizer)
     except ConfigError as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(config, arguments.recognizer)
+    run(config, recognizer)
     return 0

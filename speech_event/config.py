@@ -40,6 +40,20 @@ class SpeechEventConfig:
     confidence: float = 0.0
     # Period of the "still running" info line in verbose mode; 0 turns it off.
     heartbeat_msg_period: float = 10.0
+    # The embedded English engine (pocketsphinx): empty for its language model, or a command
+    # grammar (a JSGF file or a list of phrases), or a keyword list.
+    pocketsphinx_grammar: str = ""
+    pocketsphinx_keywords: str = ""
+
+
+# Keys that name files; a scenario's relative paths are taken from the scenario's folder.
+PATH_KEYS = (
+    "rw_model_path",
+    "en_model_path",
+    "audio_storage_dir",
+    "pocketsphinx_grammar",
+    "pocketsphinx_keywords",
+)
 
 
 _FORMAT = KeyValueFormat(
@@ -59,6 +73,10 @@ _FORMAT = KeyValueFormat(
         "max_message_length": seconds(0.1, 3600.0),
         "confidence": KeyRule(number(float, 0.0, 1.0), "a number from 0 to 1"),
         "heartbeat_msg_period": seconds(0.0, 3600.0),
+        "pocketsphinx_grammar": KeyRule(
+            text, "a JSGF file or a file of phrases, one a line; empty: language model"
+        ),
+        "pocketsphinx_keywords": KeyRule(text, "a keyword list file (pocketsphinx kws format); empty: none"),
     },
 )
 

@@ -78,10 +78,10 @@ MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"pu
             "s.toml: steps[0]: the tones voice cannot speak '!', 'H'; it speaks only [a-z' ]",
         ),
         ({"steps": [{"say": 5}]}, "s.toml: steps[0]: 'say' = 5 must be of type str"),
-        ({"voice": "robot"}, "s.toml: 'voice' = 'robot' is not allowed; allowed: tones"),
+        ({"voice": "robot"}, "s.toml: 'voice' = 'robot' is not allowed; allowed: tones, tts"),
         (
             {"config": {"speech_pause": 1}},
-            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, cuda, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period",
+            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, cuda, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period, pocketsphinx_grammar, pocketsphinx_keywords",
         ),
         ({"expect": {"published": [1]}}, "s.toml: [expect]: 'published' must be a list of strings"),
     ],
@@ -140,10 +140,22 @@ def test_the_cli_exits_2_on_a_bad_scenario_file(tmp_path: Path) -> None:
     assert result.stderr.startswith(f"error: {bad}: not valid TOML: ")
 
 
-def test_the_demo_turns_speech_into_text() -> None:
-    result = _harness("demo")
-    assert result.returncode == 0
-    assert result.stdout == (
-        "soundDetection says 'go to the kitchen' (tones voice, 48000 Hz, 4096-sample blocks)\n"
-        "/speechEvent/text at t=2.524 s: 'go to the kitchen'\n"  # 12 blocks, then the 1.5 s pause
-    )
+def test_the_demo_turns_real_speech_into_text_on_embedded_defaults() -> None:
+    result = _harness("demo", "go to the kitchen")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[:2] == [
+        "soundDetection says 'go to the kitchen' (tts voice, 48000 Hz, 4096-sample blocks)",
+        f"speechEvent transcribes with auto, grammar {ROOT / 'config' / 'robot_commands.txt'}",
+    ]
+    assert len(lines) == 3
+    assert lines[2].startswith("/speechEvent/text at t=")
+    assert lines[2].endswith(" s: 'go to the kitchen'")
+
+
+def test_the_demo_with_the_tones_voice_and_the_fake_recognizer() -> None:
+    result = _harness("demo", "--voice", "tones", "--recognizer", "fake", "hello there")
+    assert result.stdout.splitlines()[1:] == [
+        "speechEvent transcribes with fake",
+        "/speechEvent/text at t=2.268 s: 'hello there'",  # 9 blocks, then the 1.5 s pause
+    ]

@@ -1,8 +1,50 @@
-"""Recognizers: adapters of the Recognizer port, by the name a config or scenario gives."""
+"""Recognizers by name: adapters of the Recognizer port, built from the node's configuration.
+
+``auto`` is what the robot runs: the NeMo model of the configured language when its path is set,
+otherwise, for English, the embedded pocketsphinx engine. Engines import their runtime only when
+chosen, so the node itself needs neither onnxruntime nor pocketsphinx.
+"""
 
 from typing import Callable, Dict
 
+from speech_event.asr.errors import ModelError
+from speech_event.config import SpeechEventConfig
 from speech_event.ports import Recognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
-RECOGNIZERS: Dict[str, Callable[[], Recognizer]] = {"fake": ToneRecognizer}
+RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
+
+
+def nemo(config: SpeechEventConfig) -> Recognizer:
+    from speech_event.asr.engine import NemoTransducerRecognizer
+
+    key = "rw_model_path" if config.language == "kinyarwanda" else "en_model_path"
+    path = getattr(config, key)
+    if not path:
+        raise ModelError(
+            f"language {config.language} needs {key}: the directory of an exported NeMo transducer "
+            "(speech-event export-nemo MODEL.nemo DIR writes one)"
+        )
+    return NemoTransducerRecognizer(path, config.cuda)
+
+
+def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
+    from speech_event.recognizers.sphinx import SphinxRecognizer
+
+    if config.language != "english":
+        raise ModelError(f"pocketsphinx transcribes English only; language is {config.language}")
+    return SphinxRecognizer(config.pocketsphinx_grammar, config.pocketsphinx_keywords)
+
+
+def auto(config: SpeechEventConfig) -> Recognizer:
+    if config.language == "english" and not config.en_model_path:
+        return pocketsphinx(config)
+    return nemo(config)
+
+
+RECOGNIZERS: Dict[str, RecognizerFactory] = {
+    "auto": auto,
+    "nemo": nemo,
+    "pocketsphinx": pocketsphinx,
+    "fake": lambda config: ToneRecognizer(),
+}
