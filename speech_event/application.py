@@ -66,6 +66,10 @@ def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
 def main(argv: Optional[List[str]] = None) -> int:
     # rospy's remappings (name:=value, __name:=...) are for rospy, not for argparse.
     raw = sys.argv[1:] if argv is None else argv
+    if raw[:1] == ["export-nemo"]:
+        from speech_event.asr.export_nemo import main as export_main
+
+        return export_main(raw[1:])
     arguments = _arguments([word for word in raw if ":=" not in word])
     try:
         config = load_config(arguments.config)
