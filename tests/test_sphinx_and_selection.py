@@ -98,3 +98,9 @@ def test_kinyarwanda_without_a_model_stops_the_node_with_status_2(tmp_path: Path
         "error: language kinyarwanda needs rw_model_path: the directory of an exported NeMo transducer "
         "(speech-event export-nemo MODEL.nemo DIR writes one)\n"
     )
+
+
+def test_a_phrase_grammar_publishes_only_whole_phrases() -> None:
+    recognizer = SphinxRecognizer(grammar=str(COMMANDS))
+    # Speech that is no command: pocketsphinx's best path ends inside a phrase ("go to the living").
+    assert recognizer.transcribe(speak_tts("the weather is lovely in kigali today", 16000)).text == ""

@@ -8,7 +8,7 @@ line, optionally with its threshold as ``/1e-20/``, pocketsphinx's kws format).
 
 import re
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Optional, Set
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from speech_event.ports import Transcript
 
 SAMPLE_RATE = 16000
 _WORD = re.compile(r"^[a-z']+$")
+_PHRASE = re.compile(r"\( ([a-z' ]+) \)")
 # Keyword spotting fires several times on one spoken keyword: detections of the same keyword that
 # start within this many frames (10 ms each) of the previous one's end are one.
 _SAME_KEYWORD_FRAMES = 50
@@ -44,6 +45,9 @@ class SphinxRecognizer:
             raise ModelError("set pocketsphinx_grammar or pocketsphinx_keywords, not both")
         self._decoder = Decoder(samprate=SAMPLE_RATE, loglevel="FATAL")
         self._spotting = bool(keywords)
+        # The sentences of a phrase-list grammar: pocketsphinx returns its best partial path when
+        # no sentence fits (measured: "tell" for a "stop" it missed), which must not be published.
+        self._phrases: Optional[Set[str]] = None
         if grammar:
             self._use_grammar(Path(grammar))
         elif keywords:
@@ -60,11 +64,11 @@ class SphinxRecognizer:
             raise ModelError(
                 f"{path}: cannot read the grammar (pocketsphinx_grammar): {problem.strerror}"
             ) from None
-        jsgf = (
-            content
-            if content.lstrip().startswith("#JSGF")
-            else phrases_to_jsgf(content.splitlines(), str(path))
-        )
+        if content.lstrip().startswith("#JSGF"):
+            jsgf = content
+        else:
+            jsgf = phrases_to_jsgf(content.splitlines(), str(path))
+            self._phrases = set(_PHRASE.findall(jsgf))
         words = set(re.findall(r"[a-z']+", _sentences(jsgf)))
         unknown = sorted(word for word in words if self._decoder.lookup_word(word) is None)
         if unknown:
@@ -84,8 +88,11 @@ class SphinxRecognizer:
         if self._spotting:
             return Transcript(" ".join(self._keywords_in_order()))
         hypothesis = self._decoder.hyp()
+        text = "" if hypothesis is None else " ".join(hypothesis.hypstr.split())
+        if self._phrases is not None and text not in self._phrases:
+            text = ""
         # No confidence: pocketsphinx computes no posterior unless asked to (its prob stays 0).
-        return Transcript("" if hypothesis is None else " ".join(hypothesis.hypstr.split()))
+        return Transcript(text)
 
     def _keywords_in_order(self) -> List[str]:
         words: List[str] = []

@@ -1,0 +1,138 @@
+"""Speech engine figures (python -m bench.asr). Targets, from the issue: grammar-mode WER 0 on the
+command set; real-time factors measured on 2 cores and written down.
+
+(a) pocketsphinx on 32 tts-voice robot commands, language-model mode and grammar mode;
+(b) pocketsphinx on the real recorded speech of Debian's pocketsphinx-testdata (LibriVox);
+(c) the NeMo features, and the NeMo engine on a model built at test time.
+"""
+
+import tempfile
+import time
+import wave
+from pathlib import Path
+from typing import List, Sequence, Tuple
+
+import numpy as np
+
+from fixtures.audio import noise
+from fixtures.transducer_model import build_random_transducer
+from fixtures.tts import speak_tts
+from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.features import FeatureSettings, features
+from speech_event.ports import Recognizer
+from speech_event.recognizers.sphinx import SphinxRecognizer
+
+COMMANDS = [
+    "hello pepper",
+    "goodbye",
+    "thank you",
+    "yes",
+    "no",
+    "stop",
+    "follow me",
+    "come here",
+    "turn left",
+    "turn right",
+    "go forward",
+    "go back",
+    "go to the kitchen",
+    "go to the living room",
+    "go to the door",
+    "open the door",
+    "close the door",
+    "bring me the red cup",
+    "bring me the blue cup",
+    "put it on the table",
+    "pick up the ball",
+    "what time is it",
+    "what is your name",
+    "how are you",
+    "tell me a story",
+    "play some music",
+    "turn on the light",
+    "turn off the light",
+    "sit down",
+    "stand up",
+    "look at me",
+    "wave your hand",
+]
+LIBRIVOX = Path("/usr/share/pocketsphinx/test/data/librivox")
+
+
+def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
+    """(word edits, reference words): Levenshtein distance over words."""
+    ref, hyp = reference.split(), hypothesis.split()
+    previous = list(range(len(hyp) + 1))
+    for i, word in enumerate(ref, start=1):
+        current = [i]
+        for j, other in enumerate(hyp, start=1):
+            current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != other)))
+        previous = current
+    return previous[-1], len(ref)
+
+
+def score(recognizer: Recognizer, samples: Sequence[Tuple[str, np.ndarray]]) -> Tuple[float, float]:
+    """(WER, real-time factor) over (reference, 16 kHz audio) pairs."""
+    edits = words = 0
+    busy = audio_seconds = 0.0
+    for reference, audio in samples:
+        start = time.perf_counter()
+        hypothesis = recognizer.transcribe(audio).text
+        busy += time.perf_counter() - start
+        audio_seconds += audio.size / 16000
+        errors, count = word_errors(reference, hypothesis)
+        edits, words = edits + errors, words + count
+    return edits / words, busy / audio_seconds
+
+
+def commands() -> None:
+    samples = [(command, speak_tts(command, 16000)) for command in COMMANDS]
+    with tempfile.TemporaryDirectory() as work:
+        grammar = Path(work) / "commands.txt"
+        grammar.write_text("\n".join(COMMANDS))
+        for mode, recognizer in (
+            ("language model", SphinxRecognizer()),
+            ("grammar", SphinxRecognizer(grammar=str(grammar))),
+        ):
+            wer, rtf = score(recognizer, samples)
+            print(f"pocketsphinx, {len(COMMANDS)} tts commands, {mode}: WER {wer:.3f}, RTF {rtf:.3f}")
+
+
+def recorded_speech() -> None:
+    if not LIBRIVOX.is_dir():
+        print("pocketsphinx on recorded speech: skipped, apt-get install pocketsphinx-testdata")
+        return
+    samples: List[Tuple[str, np.ndarray]] = []
+    for line in (LIBRIVOX / "transcription").read_text().splitlines():
+        text, _, file_id = line.rpartition(" (")
+        with wave.open(str(LIBRIVOX / f"{file_id.rstrip(')')}.wav")) as wav:
+            pcm = np.frombuffer(wav.readframes(wav.getnframes()), dtype="<i2")
+        samples.append((text.replace("<s>", "").replace("</s>", "").strip(), pcm.astype(np.float32) / 32768))
+    wer, rtf = score(SphinxRecognizer(), samples)
+    seconds = sum(audio.size for _, audio in samples) / 16000
+    print(
+        f"pocketsphinx, LibriVox ({len(samples)} utterances, {seconds:.0f} s), language model: "
+        f"WER {wer:.3f}, RTF {rtf:.3f}"
+    )
+
+
+def nemo_engine() -> None:
+    audio = noise(10 * 16000, -20.0, np.random.default_rng(0))
+    settings = FeatureSettings()
+    start = time.perf_counter()
+    for _ in range(10):
+        features(audio, settings)
+    print(f"NeMo features: RTF {(time.perf_counter() - start) / 100:.4f} (10 s of audio, 10 runs)")
+    with tempfile.TemporaryDirectory() as work:
+        model = NemoTransducerRecognizer(build_random_transducer(Path(work) / "model"))
+        start = time.perf_counter()
+        model.transcribe(audio)
+        print(
+            f"NeMo engine, small test model (32-wide encoder): RTF {(time.perf_counter() - start) / 10:.4f}"
+        )
+
+
+if __name__ == "__main__":
+    commands()
+    recorded_speech()
+    nemo_engine()
