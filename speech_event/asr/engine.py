@@ -1,7 +1,7 @@
 """The NeMo conformer-transducer recognizer: features -> encoder -> greedy RNN-T -> vocabulary."""
 
 from pathlib import Path
-from typing import Union
+from typing import List, Union
 
 import numpy as np
 
@@ -35,16 +35,18 @@ class NemoTransducerRecognizer:
     def sample_rate(self) -> int:
         return self._manifest.features.sample_rate
 
-    def transcribe(self, audio: np.ndarray) -> Transcript:
+    def token_ids(self, audio: np.ndarray) -> List[int]:
+        """The greedy token ids for 16 kHz ``audio``, before the vocabulary turns them to text."""
         inputs = features(audio, self._manifest.features)
         if inputs.shape[1] == 0:
-            return Transcript("")
-        frames = self._model.encode(inputs)
-        tokens = greedy_decode(
-            frames,
+            return []
+        return greedy_decode(
+            self._model.encode(inputs),
             self._model.step,
             self._model.initial_state(),
             self._vocabulary.blank,
             self._manifest.max_symbols_per_step,
         )
-        return Transcript(self._vocabulary.text(tokens))
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        return Transcript(self._vocabulary.text(self.token_ids(audio)))
