@@ -3,7 +3,7 @@
 from dataclasses import dataclass
 from typing import List
 
-from harness.catalog import RECOGNIZERS
+from harness.catalog import recognizer_for
 from harness.scenario import Scenario
 from harness.timeline import ComeUp, GoDown, Publish, build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
@@ -40,7 +40,7 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[
     )
     executor = ClockExecutor(clock, recognition_seconds)
     node = SpeechEventNode(
-        scenario.config, bus, clock, RECOGNIZERS[scenario.recognizer](scenario.config), executor
+        scenario.config, bus, clock, recognizer_for(scenario.recognizer, scenario.config), executor
     )
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     node.start()

@@ -26,6 +26,7 @@ import rospy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
+from harness.catalog import engine_for
 from harness.memory_runner import Published
 from harness.scenario import ReplayError, Scenario
 from harness.timeline import ComeUp, Event, GoDown, Publish, Timeline, build_timeline
@@ -169,8 +170,9 @@ class RosReplay:
     # -- the node under test ----------------------------------------------------------------------
 
     def _start_node(self, scenario: Scenario) -> "subprocess.Popen[str]":
+        engine, config = engine_for(scenario.recognizer, scenario.config)
         config_path = self._work / "speech_event_configuration.ini"
-        config_path.write_text(format_config(scenario.config))
+        config_path.write_text(format_config(config))
         if self._options.node_command:
             command = shlex.split(self._options.node_command.format(config=config_path))
         else:
@@ -180,7 +182,7 @@ class RosReplay:
                 "-c",
                 str(config_path),
                 "--recognizer",
-                scenario.recognizer,
+                engine,
             ]
         return self.processes.start("node", command)
 

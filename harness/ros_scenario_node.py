@@ -5,6 +5,7 @@ import argparse
 import sys
 from typing import List, Optional
 
+from harness.catalog import engine_for
 from harness.scenario import ScenarioError, load_scenario
 from speech_event.application import build_recognizer, run
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
@@ -19,9 +20,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
         scenario = load_scenario(arguments.scenario, base)
-        recognizer = build_recognizer(scenario.config, scenario.recognizer)
+        engine, config = engine_for(scenario.recognizer, scenario.config)
+        recognizer = build_recognizer(config, engine)
     except (ConfigError, ScenarioError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(scenario.config, recognizer)
+    run(config, recognizer)
     return 0

@@ -190,7 +190,7 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         steps=steps,
         expected=tuple(published),
         voice=voice,
-        recognizer=top.choice("recognizer", tuple(RECOGNIZERS), "fake"),
+        recognizer=top.choice("recognizer", RECOGNIZERS, "fake"),
         background_noise_db=None if noise_db is None else float(noise_db),
         seed=int(top.get("seed", int, 0)),
     )
