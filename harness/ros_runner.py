@@ -44,9 +44,6 @@ EVENT_TIMEOUT = 20.0
 # recognition runs and its text is published: the runner waits this long for that text.
 TIMER_SETTLE = 0.03
 TEXT_WAIT = 1.0
-# A health check asks the master over XML-RPC; a loaded machine once took longer than
-# TIMER_SETTLE, and the next event (a crash) overtook it. Check times are few: wait longer there.
-HEALTH_SETTLE = 0.25
 
 
 def _wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT_TIMEOUT) -> None:
@@ -223,11 +220,8 @@ class RosReplay:
         stand_in = _StandIn(self.processes, scenario_path, self._options.base_config, self._node_uri())
         closing_times = _utterance_closing_times(scenario, timeline)
         wall_start = time.monotonic()
-        checks = _health_check_times(scenario, timeline)
         for when in _times_to_visit(scenario, timeline, closing_times):
             self._set_clock(when, wall_start)
-            if when in checks and not self._options.real_time:
-                time.sleep(HEALTH_SETTLE)
             if when in closing_times:
                 self._wait_for_a_text()
             for index, event in enumerate(timeline.events):
@@ -321,11 +315,8 @@ def _utterance_closing_times(scenario: Scenario, timeline: Timeline) -> Set[floa
     }
 
 
-def _health_check_times(scenario: Scenario, timeline: Timeline) -> Set[float]:
-    period = scenario.config.health_check_period
-    return {period * k for k in range(1, int(timeline.end / period) + 1)}
-
-
 def _times_to_visit(scenario: Scenario, timeline: Timeline, closing_times: Set[float]) -> List[float]:
+    period = scenario.config.health_check_period
+    checks = {period * k for k in range(1, int(timeline.end / period) + 1)}
     events = {event.time for event in timeline.events}
-    return sorted({*events, *_health_check_times(scenario, timeline), *closing_times, timeline.end})
+    return sorted({*events, *checks, *closing_times, timeline.end})

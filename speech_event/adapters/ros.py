@@ -7,6 +7,7 @@ master but its connection is gone, and that reads as down.
 """
 
 import logging
+import threading
 from typing import Callable, Dict
 
 import rosgraph
@@ -87,20 +88,42 @@ class RosTransport:
         return PublisherStatus.STALE
 
 
-class RosTimer:
-    def __init__(self, timer: rospy.Timer) -> None:
-        self._timer = timer
-
-    def cancel(self) -> None:
-        self._timer.shutdown()
-
-
-# rospy's timer arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock
-# is stepped could miss that step by 1 ns. Timers fire this much early; the node's callbacks check
+# Time arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock is
+# stepped could miss that step by 1 ns. Timers fire this much early; the node's callbacks check
 # the time themselves (a pause timer that fires early is set again).
 EARLY = 1e-4
-# rospy.Timer divides by its period: a timer that is already due waits this long instead.
-_SHORTEST_WAIT = 1e-4
+# Longest single wait, so a cancelled timer's thread ends soon after.
+_LONGEST_WAIT = 0.5
+
+
+class RosTimer:
+    """Runs a callback once ROS time reaches an absolute time.
+
+    Not rospy.Timer: it counts its period from when its own thread starts, so a timer set for time
+    T fired at T plus however late that thread started (seen in replay: a health check due at 2 s
+    ran after an event at 2.024 s).
+    """
+
+    def __init__(self, when: float, callback: Callable[[], None]) -> None:
+        self._cancelled = threading.Event()
+        thread = threading.Thread(
+            target=self._run, args=(when, callback), name="speech_event_timer", daemon=True
+        )
+        thread.start()
+
+    def cancel(self) -> None:
+        self._cancelled.set()
+
+    def _run(self, when: float, callback: Callable[[], None]) -> None:
+        while not self._cancelled.is_set():
+            remaining = when - EARLY - rospy.get_time()
+            if remaining <= 0:
+                callback()
+                return
+            try:
+                rospy.sleep(min(remaining, _LONGEST_WAIT))  # follows /clock under /use_sim_time
+            except rospy.ROSInterruptException:  # the node is shutting down
+                return
 
 
 class RosClock:
@@ -110,8 +133,7 @@ class RosClock:
         return float(rospy.get_time())
 
     def call_at(self, when: float, callback: Callable[[], None]) -> RosTimer:
-        wait = max(when - EARLY - self.now(), _SHORTEST_WAIT)
-        return RosTimer(rospy.Timer(rospy.Duration.from_sec(wait), lambda _event: callback(), oneshot=True))
+        return RosTimer(when, callback)
 
 
 class RosLogHandler(logging.Handler):
