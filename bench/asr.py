@@ -3,7 +3,8 @@ command set; real-time factors measured on 2 cores and written down.
 
 (a) pocketsphinx on 32 tts-voice robot commands, language-model mode and grammar mode;
 (b) pocketsphinx on the real recorded speech of Debian's pocketsphinx-testdata (LibriVox);
-(c) the NeMo features, and the NeMo engine on a model built at test time.
+(c) the NeMo features, and the NeMo engine on models built at test time (a random one and the
+tones fixture model); the large-size figure comes from bench/nemo_parity.py (needs NeMo).
 """
 
 import tempfile
