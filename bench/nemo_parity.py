@@ -19,6 +19,7 @@ from typing import Any, Dict, List
 
 import numpy as np
 
+from fixtures.nemo_config import PREPROCESSOR
 from fixtures.tts import speak_tts
 from speech_event.asr.engine import NemoTransducerRecognizer
 from speech_event.asr.export_nemo import export
@@ -66,21 +67,7 @@ def _large_config(tokenizer: Path) -> Dict[str, Any]:
         "labels": None,
         "model_defaults": {"enc_hidden": 512, "pred_hidden": 640, "joint_hidden": 640},
         "tokenizer": {"dir": str(tokenizer), "type": "bpe"},
-        "preprocessor": {
-            "_target_": "nemo.collections.asr.modules.AudioToMelSpectrogramPreprocessor",
-            "sample_rate": 16000,
-            "normalize": "per_feature",
-            "window_size": 0.025,
-            "window_stride": 0.01,
-            "window": "hann",
-            "features": 80,
-            "n_fft": 512,
-            "log": True,
-            "frame_splicing": 1,
-            "dither": 0.00001,
-            "pad_to": 0,
-            "pad_value": 0.0,
-        },
+        "preprocessor": PREPROCESSOR,
         "spec_augment": None,
         "encoder": {
             "_target_": "nemo.collections.asr.modules.ConformerEncoder",

@@ -7,6 +7,7 @@ from typing import List, Optional
 
 from harness.driver import DRIVER_FORMAT, WavError, play, read_wav
 from speech_event import SIGNAL_TOPIC
+from speech_event.application import without_remappings
 from speech_event.keyvalue import ConfigError
 from speech_event.messages import Float32MultiArray
 
@@ -17,8 +18,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="speech_event_driver")
     parser.add_argument("-c", "--config", required=True, help="driver configuration (Table 2 keys)")
     parser.add_argument("wav", help="the audio to publish, a PCM WAV file")
-    raw = sys.argv[1:] if argv is None else argv
-    arguments = parser.parse_args([word for word in raw if ":=" not in word])
+    arguments = parser.parse_args(without_remappings(argv))
     try:
         config = DRIVER_FORMAT.load(arguments.config)
         audio = read_wav(arguments.wav, config.sample_rate)

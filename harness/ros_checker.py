@@ -3,7 +3,6 @@
 prints the PASS/FAIL report and exits 0 or 1 (``required="true"`` ends the launch with it)."""
 
 import argparse
-import sys
 import time
 from typing import List, Optional
 
@@ -13,19 +12,16 @@ from std_msgs.msg import String
 from harness.memory_runner import Published
 from harness.report import passed, report
 from harness.ros_sound_detection import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
-from harness.scenario import load_scenario
+from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from speech_event import TEXT_TOPIC
-from speech_event.config import SpeechEventConfig, load_config
+from speech_event.application import without_remappings
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="speech_event_checker")
-    parser.add_argument("scenario")
-    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
-    raw = sys.argv[1:] if argv is None else argv
-    arguments = parser.parse_args([word for word in raw if ":=" not in word])
-    base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
-    scenario = load_scenario(arguments.scenario, base)
+    add_scenario_arguments(parser)
+    arguments = parser.parse_args(without_remappings(argv))
+    scenario = scenario_from_arguments(arguments)
     rospy.init_node("speechEventChecker", disable_signals=True)
     published: List[Published] = []
     texts = rospy.Subscriber(

@@ -6,20 +6,17 @@ import sys
 from typing import List, Optional
 
 from harness.catalog import engine_for
-from harness.scenario import ScenarioError, load_scenario
-from speech_event.application import build_recognizer, run
-from speech_event.config import ConfigError, SpeechEventConfig, load_config
+from harness.scenario import ScenarioError, add_scenario_arguments, scenario_from_arguments
+from speech_event.application import build_recognizer, run, without_remappings
+from speech_event.config import ConfigError
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="speech_event_scenario_node")
-    parser.add_argument("scenario")
-    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
-    raw = sys.argv[1:] if argv is None else argv
-    arguments = parser.parse_args([word for word in raw if ":=" not in word])
+    add_scenario_arguments(parser)
+    arguments = parser.parse_args(without_remappings(argv))
     try:
-        base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
-        scenario = load_scenario(arguments.scenario, base)
+        scenario = scenario_from_arguments(arguments)
         engine, config = engine_for(scenario.recognizer, scenario.config)
         recognizer = build_recognizer(config, engine)
     except (ConfigError, ScenarioError) as problem:

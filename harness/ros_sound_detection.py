@@ -21,11 +21,11 @@ import rospy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
-from harness.scenario import load_scenario
+from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from harness.timeline import ComeUp, GoDown, Publish, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosPublisher, RosTransport
-from speech_event.config import SpeechEventConfig, load_config
+from speech_event.application import without_remappings
 from speech_event.messages import Float32MultiArray
 
 CONNECT_TIMEOUT = 30.0
@@ -106,14 +106,11 @@ def _play_alone(timeline: Timeline, publisher: RosPublisher, wrong_type_command:
 
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="sound_detection_replay")
-    parser.add_argument("scenario")
-    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
+    add_scenario_arguments(parser)
     parser.add_argument("--wrong-type", type=int, metavar="I", help="publish event I as another node")
     parser.add_argument("--autonomous", action="store_true", help="play the timeline alone on ROS time")
-    raw = sys.argv[1:] if argv is None else argv
-    arguments = parser.parse_args([word for word in raw if ":=" not in word])
-    base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
-    timeline = build_timeline(load_scenario(arguments.scenario, base))
+    arguments = parser.parse_args(without_remappings(argv))
+    timeline = build_timeline(scenario_from_arguments(arguments))
     events: List[object] = list(timeline.events)
     if arguments.wrong_type is not None:
         _publish_wrong_type(events, arguments.wrong_type)

@@ -4,13 +4,14 @@ The format is a contract shared with scenarios written elsewhere (see README.md)
 not follow it gets a ``ScenarioError`` naming the file, the place in it and what is allowed.
 """
 
+import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
 from harness.catalog import RECOGNIZERS, VOICES
-from speech_event.config import PATH_KEYS, ConfigError, SpeechEventConfig, apply_overrides
+from speech_event.config import PATH_KEYS, ConfigError, SpeechEventConfig, apply_overrides, load_config
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -204,3 +205,14 @@ def load_scenario(path: Union[str, Path], base_config: SpeechEventConfig) -> Sce
     except tomllib.TOMLDecodeError as problem:
         raise ScenarioError(f"{path}: not valid TOML: {problem}") from None
     return parse_scenario(document, str(path), base_config)
+
+
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """SCENARIO and -c CONFIG, for the programs that play one scenario on ROS."""
+    parser.add_argument("scenario", help="the scenario file")
+    parser.add_argument("-c", "--config", help="configuration the scenario's [config] overrides")
+
+
+def scenario_from_arguments(arguments: argparse.Namespace) -> Scenario:
+    base = load_config(arguments.config) if arguments.config else SpeechEventConfig()
+    return load_scenario(arguments.scenario, base)

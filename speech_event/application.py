@@ -63,14 +63,18 @@ def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
         logger.warning("abandoned a recognition still running after %.0f s", SHUTDOWN_GRACE_SECONDS)
 
 
+def without_remappings(argv: Optional[List[str]]) -> List[str]:
+    """The command line (sys.argv by default) without rospy's remappings (name:=value, __name:=...)."""
+    return [word for word in (sys.argv[1:] if argv is None else argv) if ":=" not in word]
+
+
 def main(argv: Optional[List[str]] = None) -> int:
-    # rospy's remappings (name:=value, __name:=...) are for rospy, not for argparse.
-    raw = sys.argv[1:] if argv is None else argv
+    raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
         from speech_event.asr.export_nemo import main as export_main
 
         return export_main(raw[1:])
-    arguments = _arguments([word for word in raw if ":=" not in word])
+    arguments = _arguments(raw)
     try:
         config = load_config(arguments.config)
         recognizer = build_recognizer(config, arguments.recognizer)

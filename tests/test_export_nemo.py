@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from fixtures.nemo_config import PREPROCESSOR
 from speech_event.asr.errors import ModelError
 from speech_event.asr.export_nemo import manifest_from_preprocessor, vocabulary_lines
 from speech_event.asr.features import FeatureSettings
@@ -14,36 +15,19 @@ from speech_event.asr.manifest import Manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# The preprocessor section of NeMo's conformer-transducer configurations.
-CONFORMER_PREPROCESSOR = {
-    "_target_": "nemo.collections.asr.modules.AudioToMelSpectrogramPreprocessor",
-    "sample_rate": 16000,
-    "normalize": "per_feature",
-    "window_size": 0.025,
-    "window_stride": 0.01,
-    "window": "hann",
-    "features": 80,
-    "n_fft": 512,
-    "log": True,
-    "frame_splicing": 1,
-    "dither": 0.00001,
-    "pad_to": 0,
-    "pad_value": 0.0,
-}
-
 
 def test_the_conformer_preprocessor_config_becomes_the_engine_features() -> None:
-    assert manifest_from_preprocessor(CONFORMER_PREPROCESSOR, 10) == Manifest(FeatureSettings(), 10)
+    assert manifest_from_preprocessor(PREPROCESSOR, 10) == Manifest(FeatureSettings(), 10)
 
 
 def test_n_fft_left_out_is_the_next_power_of_two_of_the_window_as_in_nemo() -> None:
-    preprocessor = {**CONFORMER_PREPROCESSOR, "n_fft": None}
+    preprocessor = {**PREPROCESSOR, "n_fft": None}
     assert manifest_from_preprocessor(preprocessor, None).features.n_fft == 512
 
 
 def test_a_preprocessor_the_engine_does_not_implement_is_refused_by_name() -> None:
     with pytest.raises(ModelError) as error:
-        manifest_from_preprocessor({**CONFORMER_PREPROCESSOR, "window": "hamming"}, 10)
+        manifest_from_preprocessor({**PREPROCESSOR, "window": "hamming"}, 10)
     assert (
         str(error.value)
         == "preprocessor window = 'hamming' is not supported; the engine computes window = 'hann'"
