@@ -43,22 +43,18 @@ def build_recognizer(config: SpeechEventConfig, name: str) -> Recognizer:
 
 
 def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
-    import rospy  # only the ROS entry point needs it
-
+    # Only the ROS entry point needs the ROS adapters (and so rospy).
     from speech_event.adapters.executors import ThreadExecutor
-    from speech_event.adapters.ros import RosClock, RosLogHandler, RosTransport
+    from speech_event.adapters.ros import RosClock, RosTransport, start_ros_node, wait_for_shutdown
     from speech_event.node import SpeechEventNode
 
-    rospy.init_node(NODE_NAME)
-    logger = logging.getLogger("speech_event")
-    logger.addHandler(RosLogHandler())
-    logger.setLevel(logging.INFO if config.verbose_mode else logging.WARNING)
-    logger.propagate = False
+    start_ros_node(NODE_NAME, verbose=config.verbose_mode)
     executor = ThreadExecutor()
     node = SpeechEventNode(config, RosTransport(), RosClock(), recognizer, executor)
     node.start()
-    rospy.spin()
+    wait_for_shutdown()
     node.stop()
+    logger = logging.getLogger("speech_event")
     if not executor.shutdown(SHUTDOWN_GRACE_SECONDS):
         logger.warning("abandoned a recognition still running after %.0f s", SHUTDOWN_GRACE_SECONDS)
 

@@ -149,3 +149,17 @@ class RosLogHandler(logging.Handler):
             rospy.loginfo(text)
         else:
             rospy.logdebug(text)
+
+
+def start_ros_node(name: str, verbose: bool) -> None:
+    """Register this process with the master and send the node's log records to rosout."""
+    rospy.init_node(name)
+    logger = logging.getLogger("speech_event")
+    logger.addHandler(RosLogHandler())
+    logger.setLevel(logging.INFO if verbose else logging.WARNING)
+    logger.propagate = False  # rosout prints them already
+
+
+def wait_for_shutdown() -> None:
+    """Block until ROS shuts the node down (SIGINT, rosnode kill, the master going away)."""
+    rospy.spin()
