@@ -66,7 +66,8 @@ class SpeechEventNode:
 
     @property
     def rejection_counts(self) -> Dict[str, int]:
-        return {reason.value: count for reason, count in self._rejections.counts.items()}
+        with self._lock:
+            return {reason.value: count for reason, count in self._rejections.counts.items()}
 
     @property
     def pending_samples(self) -> int:
@@ -94,10 +95,10 @@ class SpeechEventNode:
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition."""
         samples = validate_signal(message, self._max_samples)
-        if isinstance(samples, Rejection):
-            self._rejections.record(samples)
-            return
-        with self._lock:
+        with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
+            if isinstance(samples, Rejection):
+                self._rejections.record(samples)
+                return
             self._last_arrival = self._clock.now()
             for utterance in self._assembler.add(samples):
                 self._submit(utterance)
@@ -136,15 +137,18 @@ class SpeechEventNode:
             transcript = Transcript("")
         text = text_to_publish(transcript, self._config)
         _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
-        if text is not None and self._text_publisher is not None:
-            self._text_publisher.publish(String(text))
+        if text is not None:
+            self._publish(text)
 
     def _check_health(self) -> None:
         status = self._transport.publisher_status(SIGNAL_TOPIC)
         if status is not PublisherStatus.CONNECTED:
             _LOG.warning("soundDetection is down on %s: %s", SIGNAL_TOPIC, status.value)
-            if self._text_publisher is not None:
-                self._text_publisher.publish(String(SOUND_DETECTION_DOWN))
+            self._publish(SOUND_DETECTION_DOWN)
+
+    def _publish(self, text: str) -> None:
+        if self._text_publisher is not None:  # None only before start()
+            self._text_publisher.publish(String(text))
 
     def _heartbeat(self) -> None:
         _LOG.info(
