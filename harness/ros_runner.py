@@ -7,6 +7,7 @@ made), and after each clock step it gives the node's timers time to run. ``real_
 wall clock instead. Every process it starts is stopped again, also on failure or Ctrl-C.
 """
 
+import contextlib
 import os
 import shlex
 import signal
@@ -69,43 +70,34 @@ class Processes:
         self._started: List[subprocess.Popen] = []  # type: ignore[type-arg]
 
     def start(self, name: str, command: Sequence[str], talk: bool = False) -> "subprocess.Popen[str]":
-        log = open(self._log_dir / f"{name}.log", "a")  # noqa: SIM115 - closed with the process
-        process = subprocess.Popen(
-            list(command),
-            env=self._environment,
-            stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
-            stdout=subprocess.PIPE if talk else log,
-            stderr=log,
-            text=True,
-            start_new_session=True,
-        )
+        # The child holds its own copy of the log's descriptor; ours closes once it has started.
+        with open(self._log_dir / f"{name}.log", "a") as log:
+            process = subprocess.Popen(
+                list(command),
+                env=self._environment,
+                stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if talk else log,
+                stderr=log,
+                text=True,
+                start_new_session=True,
+            )
         self._started.append(process)
         return process
 
     def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
         if process.poll() is None:
-            with _suppress_lookup():
+            with contextlib.suppress(ProcessLookupError):  # it may have gone already
                 os.killpg(process.pid, signal.SIGINT)
             try:
                 process.wait(grace)
             except subprocess.TimeoutExpired:
-                with _suppress_lookup():
+                with contextlib.suppress(ProcessLookupError):
                     os.killpg(process.pid, signal.SIGKILL)
                 process.wait()
 
     def stop_all(self) -> None:
         for process in reversed(self._started):
             self.stop(process)
-
-
-class _suppress_lookup:
-    """The process may have gone already: that is what was wanted."""
-
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, kind: object, value: object, trace: object) -> bool:
-        return kind is ProcessLookupError
 
 
 @dataclass
