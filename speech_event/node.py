@@ -33,6 +33,9 @@ from speech_event.transcript_text import text_to_publish
 from speech_event.validate import Rejection, validate_signal
 
 _LOG = logging.getLogger("speech_event")
+# A timer may fire a little early (RosClock fires 0.1 ms early against nanosecond rounding); a
+# pause timer that fires within this of its time has come due, rather than being set again.
+TIMER_TOLERANCE = 1e-3
 
 
 class SpeechEventNode:
@@ -113,7 +116,7 @@ class SpeechEventNode:
         with self._lock:
             self._pause_timer = None
             due = self._last_arrival + self._config.speech_pause_period
-            if self._clock.now() < due - 1e-6:
+            if self._clock.now() < due - TIMER_TOLERANCE:
                 self._pause_timer = self._clock.call_at(due, self._on_pause_timer)
                 return
             utterance = self._assembler.close()

@@ -1,7 +1,7 @@
 import logging
 import wave
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ from harness.memory_runner import run_in_memory
 from harness.scenario import Say, Scenario, Silence
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
-from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryPublisher
 from speech_event.config import SpeechEventConfig, apply_overrides
 from speech_event.messages import Float32MultiArray, String
@@ -210,3 +210,25 @@ def test_shutdown_abandons_a_recognition_that_outlasts_the_grace_period() -> Non
     assert recognizer.started.wait(10)
     assert executor.shutdown(timeout=0.1) is False  # still running: abandoned (a daemon thread)
     recognizer.gate.set()
+
+
+def test_a_pause_timer_that_fires_slightly_early_closes_the_utterance_once() -> None:
+    class EarlyClock(FakeClock):
+        """Fires every timer 0.5 ms early, as a clock with rounding might."""
+
+        timers_set = 0
+
+        def call_at(self, when: float, callback: Callable[[], None]) -> FakeTimer:
+            self.timers_set += 1
+            if self.timers_set > 20:  # the node re-arms the same timer again and again: it would spin
+                raise RuntimeError("a timer was set again and again at the same instant")
+            return super().call_at(when - 0.0005, callback)
+
+    clock, bus = EarlyClock(), InMemoryBus()
+    recognizer = SpyRecognizer()
+    node = SpeechEventNode(AT_16K, bus, clock, recognizer, ClockExecutor(clock))
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    sound_detection.publish(Float32MultiArray(data=np.full(4096, 0.1, dtype=np.float32)))
+    clock.advance_to(1.4999)  # the pause (1.5 s) fired early at 1.4995: that is due
+    assert [u.size for u in recognizer.utterances] == [4096]

@@ -89,8 +89,8 @@ class RosTransport:
 
 
 # Time arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock is
-# stepped could miss that step by 1 ns. Timers fire this much early; the node's callbacks check
-# the time themselves (a pause timer that fires early is set again).
+# stepped could miss that step by 1 ns. Timers fire this much early (within the node's
+# TIMER_TOLERANCE, so the node takes them as due).
 EARLY = 1e-4
 # Longest single wait, so a cancelled timer's thread ends soon after.
 _LONGEST_WAIT = 0.5
