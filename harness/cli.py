@@ -3,6 +3,7 @@
 import argparse
 import dataclasses
 import logging
+import signal
 import sys
 from contextlib import ExitStack
 from pathlib import Path
@@ -18,6 +19,15 @@ from speech_event.config import ConfigError, SpeechEventConfig, load_config
 COMMANDS = Path(__file__).resolve().parents[1] / "config" / "robot_commands.txt"
 USAGE_ERROR = 2
 INTERRUPTED = 130
+TERMINATED = 143
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived. A BaseException, as KeyboardInterrupt: no `except Exception` may swallow it."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
 
 
 def _base_config(path: Optional[str]) -> SpeechEventConfig:
@@ -113,6 +123,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     )
     demo.set_defaults(handler=_demo)
     arguments = parser.parse_args(argv)
+    # SIGTERM (a CI time limit, timeout(1)) unwinds like Ctrl-C, so replay processes are stopped.
+    signal.signal(signal.SIGTERM, _terminate)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
         return int(arguments.handler(arguments))
@@ -125,3 +137,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     except KeyboardInterrupt:  # every process the replay started has been stopped by now
         print("interrupted", file=sys.stderr)
         return INTERRUPTED
+    except Terminated:
+        print("terminated", file=sys.stderr)
+        return TERMINATED

@@ -55,6 +55,23 @@ def _wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT
         time.sleep(0.002)
 
 
+def descendants(pid: int) -> Set[int]:
+    """Every live process below ``pid``, from /proc: roslaunch starts rosmaster and rosout in
+    sessions of their own, out of reach of a signal to roscore's process group."""
+    parents: Dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parents[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):  # the process ended while being read
+            continue
+    found: Set[int] = set()
+    frontier = {pid}
+    while frontier:
+        frontier = {child for child, parent in parents.items() if parent in frontier}
+        found |= frontier
+    return found
+
+
 def free_port() -> int:
     with closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
         probe.bind(("127.0.0.1", 0))
@@ -85,15 +102,23 @@ class Processes:
         return process
 
     def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
-        if process.poll() is None:
-            with contextlib.suppress(ProcessLookupError):  # it may have gone already
-                os.killpg(process.pid, signal.SIGINT)
-            try:
-                process.wait(grace)
-            except subprocess.TimeoutExpired:
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(process.pid, signal.SIGKILL)
-                process.wait()
+        if process.poll() is not None:
+            return
+        family = descendants(process.pid)  # before the signal: orphans are no longer below it
+        with contextlib.suppress(ProcessLookupError):  # it may have gone already
+            os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(grace)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+        deadline = time.monotonic() + grace
+        while any(Path(f"/proc/{pid}").exists() for pid in family) and time.monotonic() < deadline:
+            time.sleep(0.05)  # a clean roscore stops its rosmaster and rosout itself
+        for pid in family:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
 
     def stop_all(self) -> None:
         for process in reversed(self._started):

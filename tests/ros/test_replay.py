@@ -7,8 +7,10 @@ import time
 from pathlib import Path
 from typing import Dict, Set
 
+import pytest
 import rosgraph
 
+from harness.ros_runner import descendants
 from tests.ros.conftest import ROOT, ros_environment
 
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
@@ -83,25 +85,13 @@ def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[s
     )
 
 
-def _descendants(pid: int) -> Set[int]:
-    """Every live process below ``pid``, read from /proc."""
-    parents: Dict[int, int] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        parents[int(stat.parent.name)] = int(fields[1])
-    found: Set[int] = set()
-    frontier = {pid}
-    while frontier:
-        children = {child for child, parent in parents.items() if parent in frontier}
-        found |= children
-        frontier = children
-    return found
-
-
-def test_ctrl_c_stops_every_process_the_replay_started(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("stop_signal", "status", "said"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")],
+)
+def test_ctrl_c_or_sigterm_stops_every_process_the_replay_started(
+    tmp_path: Path, stop_signal: int, status: int, said: str
+) -> None:
     harness = subprocess.Popen(
         [
             sys.executable,
@@ -120,13 +110,14 @@ def test_ctrl_c_stops_every_process_the_replay_started(tmp_path: Path) -> None:
     )
     started: Set[int] = set()
     deadline = time.monotonic() + 60
-    while len(started) < 3 and time.monotonic() < deadline:  # roscore's, the node, soundDetection
-        started |= _descendants(harness.pid)
+    # roscore, its rosmaster and rosout (in sessions of their own), the node, soundDetection
+    while len(started) < 5 and time.monotonic() < deadline:
+        started |= descendants(harness.pid)
         time.sleep(0.05)
-    assert len(started) >= 3
-    harness.send_signal(signal.SIGINT)
+    assert len(started) >= 5
+    harness.send_signal(stop_signal)
     _, stderr = harness.communicate(timeout=60)
-    assert harness.returncode == 130
-    assert stderr.endswith("interrupted\n")
+    assert harness.returncode == status
+    assert stderr.endswith(said + "\n")
     alive = {pid for pid in started if Path(f"/proc/{pid}").exists()}
     assert alive == set()
