@@ -2,7 +2,6 @@
 failure, never a skip (tests/ros/ensure_ros_packages.sh installs it)."""
 
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -12,7 +11,7 @@ import pytest
 import rosgraph
 import rospy
 
-from harness.ros_runner import free_port
+from harness.ros_runner import Processes, free_port
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -50,14 +49,10 @@ def master_answers(uri: str) -> bool:
 def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]]:
     """A roscore of the test session's own on a free port; the test process is a ROS node on it."""
     port = free_port()
-    environment = ros_environment(port, tmp_path_factory.mktemp("roscore"))
-    core = subprocess.Popen(
-        ["roscore", "-p", str(port)],
-        env=environment,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
-    )
+    work = tmp_path_factory.mktemp("roscore")
+    environment = ros_environment(port, work)
+    processes = Processes(environment, work)  # stops rosmaster and rosout too, whatever happens
+    processes.start("roscore", ["roscore", "-p", str(port)])
     try:
         wait_for(lambda: master_answers(environment["ROS_MASTER_URI"]), "roscore")
         os.environ.update({k: environment[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME")})
@@ -65,5 +60,4 @@ def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]
         yield environment
     finally:
         rospy.signal_shutdown("tests done")
-        os.killpg(core.pid, 2)
-        core.wait(20)
+        processes.stop_all()

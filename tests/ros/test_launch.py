@@ -9,7 +9,7 @@ from typing import List
 
 import rosgraph
 
-from harness.ros_runner import free_port
+from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from tests.ros.conftest import ROOT, ros_environment, wait_for
 
@@ -23,12 +23,9 @@ def _roslaunch(port: int, launch_file: str, *arguments: str) -> List[str]:
 def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path) -> None:
     port = free_port()
     environment = ros_environment(port, tmp_path)
-    launch = subprocess.Popen(
-        _roslaunch(port, "speech_event_launch_robot.launch", "recognizer:=fake"),
-        env=environment,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
+    processes = Processes(environment, tmp_path)
+    launch = processes.start(
+        "roslaunch", _roslaunch(port, "speech_event_launch_robot.launch", "recognizer:=fake")
     )
     try:
         master = rosgraph.Master("/launchTest", master_uri=environment["ROS_MASTER_URI"])
@@ -44,12 +41,13 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
             ] in subscribers
 
         wait_for(node_is_up, "/speechEvent to subscribe and advertise", timeout=60)
+        started = descendants(launch.pid)  # the master, rosout and the node
+        assert len(started) >= 3
         os.killpg(launch.pid, signal.SIGINT)
         assert launch.wait(30) == 0
+        wait_for(lambda: not any(Path(f"/proc/{pid}").exists() for pid in started), "all of it to stop", 30)
     finally:
-        if launch.poll() is None:
-            os.killpg(launch.pid, signal.SIGKILL)
-            launch.wait()
+        processes.stop_all()
 
 
 def _test_harness_launch(tmp_path: Path, scenario: Path) -> str:
