@@ -42,7 +42,7 @@ def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scena
 
     options = RosOptions(arguments.real_time, arguments.node_command, arguments.config)
     replay = RosReplay(stack, options)
-    return lambda scenario: replay.play(scenario, scenario.source)
+    return replay.play
 
 
 def _run(arguments: argparse.Namespace) -> int:

@@ -17,10 +17,11 @@ import sys
 import tempfile
 import time
 import xmlrpc.client
+from collections import defaultdict
 from contextlib import ExitStack, closing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Sequence, Set
+from typing import Any, Callable, Dict, List, Optional, Sequence, Set, Tuple
 
 import rosgraph
 import rospy
@@ -228,22 +229,24 @@ class RosReplay:
 
     # -- playing ----------------------------------------------------------------------------------
 
-    def play(self, scenario: Scenario, scenario_path: str) -> List[Published]:
+    def play(self, scenario: Scenario) -> List[Published]:
         timeline = build_timeline(scenario)
         self._texts = []
         self._set_clock(0.0, time.monotonic())
         node = self._start_node(scenario)
         _wait_until(self._node_ready, "the node to subscribe and advertise", STARTUP_TIMEOUT)
-        stand_in = _StandIn(self.processes, scenario_path, self._options.base_config, self._node_uri())
+        stand_in = _StandIn(self.processes, scenario.source, self._options.base_config, self._node_uri())
         closing_times = _utterance_closing_times(scenario, timeline)
+        events_at: Dict[float, List[Tuple[int, Event]]] = defaultdict(list)
+        for index, event in enumerate(timeline.events):
+            events_at[event.time].append((index, event))
         wall_start = time.monotonic()
         for when in _times_to_visit(scenario, timeline, closing_times):
             self._set_clock(when, wall_start)
             if when in closing_times:
                 self._wait_for_a_text()
-            for index, event in enumerate(timeline.events):
-                if event.time == when:
-                    stand_in.play(index, event, self._live_connections)
+            for index, event in events_at.get(when, []):
+                stand_in.play(index, event, self._live_connections)
         stand_in.stop()
         self.processes.stop(node)
         return list(self._texts)
