@@ -1,4 +1,3 @@
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -15,6 +14,7 @@ from speech_event.config import (
     load_config,
     parse_config,
 )
+from tests.application import run_application
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -189,20 +189,7 @@ def test_the_deployment_node_refuses_a_bad_configuration_with_status_2_before_to
 ) -> None:
     bad = tmp_path / "robot.ini"
     bad.write_text("verboseMode maybe\n")
-    result = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "scripts" / "speech_event_application.py"),
-            "-c",
-            str(bad),
-            "--recognizer",
-            "fake",
-        ],
-        cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        capture_output=True,
-        text=True,
-    )
+    result = run_application("-c", str(bad), "--recognizer", "fake")
     assert result.returncode == 2
     assert (
         result.stderr

@@ -1,8 +1,5 @@
 """The export tool's own steps (NeMo itself is not installed in CI; bench/nemo_parity.py runs it)."""
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +9,7 @@ from speech_event.asr.errors import ModelError
 from speech_event.asr.export_nemo import manifest_from_preprocessor, vocabulary_lines
 from speech_event.asr.features import FeatureSettings
 from speech_event.asr.manifest import Manifest
+from tests.application import run_application
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,18 +37,7 @@ def test_the_vocabulary_puts_the_blank_last() -> None:
 
 
 def test_without_nemo_the_export_says_how_to_get_it(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "scripts" / "speech_event_application.py"),
-            "export-nemo",
-            "m.nemo",
-            str(tmp_path),
-        ],
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        capture_output=True,
-        text=True,
-    )
+    result = run_application("export-nemo", "m.nemo", str(tmp_path))
     assert result.returncode == 2
     assert result.stderr == (
         "error: export-nemo needs NeMo: pip install 'speech-event[export]' (nemo_toolkit and torch); "

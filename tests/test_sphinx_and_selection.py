@@ -1,8 +1,5 @@
 """The embedded English engine (pocketsphinx) in its three modes, and how the node picks its engine."""
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +12,7 @@ from speech_event.asr.errors import ModelError
 from speech_event.config import SpeechEventConfig
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.sphinx import SphinxRecognizer, phrases_to_jsgf
+from tests.application import run_application
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = ROOT / "config" / "robot_commands.txt"
@@ -87,12 +85,7 @@ def test_auto_picks_pocketsphinx_for_english_without_a_model_and_nemo_with_one(t
 def test_kinyarwanda_without_a_model_stops_the_node_with_status_2(tmp_path: Path) -> None:
     config = tmp_path / "rw.ini"
     config.write_text("language kinyarwanda\n")
-    result = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "speech_event_application.py"), "-c", str(config)],
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        capture_output=True,
-        text=True,
-    )
+    result = run_application("-c", str(config))
     assert result.returncode == 2
     assert result.stderr == (
         "error: language kinyarwanda needs rw_model_path: the directory of an exported NeMo transducer "

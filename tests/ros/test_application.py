@@ -4,10 +4,9 @@ import os
 import signal
 import subprocess
 import sys
-import time
 import wave
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Tuple
 
 import numpy as np
 import rosgraph
@@ -15,8 +14,10 @@ import rospy
 from std_msgs import msg as std_msgs
 
 from fixtures.audio import speak_tones
+from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
+from tests.application import APPLICATION
 from tests.ros.conftest import ROOT, wait_for
 
 
@@ -24,15 +25,15 @@ def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:
     return [node for name, nodes in master.getSystemState()[1] if name == topic for node in nodes]
 
 
-def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(roscore: Dict[str, str]) -> None:
-    node = subprocess.Popen(
-        [sys.executable, str(ROOT / "scripts" / "speech_event_application.py"), "--recognizer", "fake"],
-        env=roscore,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
+def _start_node(roscore: Dict[str, str], work: Path) -> "Tuple[Processes, subprocess.Popen[str]]":
+    processes = Processes(roscore, work)  # stopped whatever happens in the test
+    return processes, processes.start("node", [sys.executable, str(APPLICATION), "--recognizer", "fake"])
+
+
+def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(
+    roscore: Dict[str, str], tmp_path: Path
+) -> None:
+    processes, node = _start_node(roscore, tmp_path)
     master = rosgraph.Master("/applicationTest")
     try:
         wait_for(
@@ -40,15 +41,11 @@ def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(roscore: Dict[str
             "/speechEvent to subscribe",
             60,
         )
-        interrupted = time.monotonic()
         os.killpg(node.pid, signal.SIGINT)
         assert node.wait(SHUTDOWN_GRACE_SECONDS + 10) == 0
-        assert time.monotonic() - interrupted < SHUTDOWN_GRACE_SECONDS + 10
         wait_for(lambda: "/speechEvent" not in _subscribers(master, SIGNAL_TOPIC), "unsubscribed")
     finally:
-        if node.poll() is None:
-            os.killpg(node.pid, signal.SIGKILL)
-            node.wait()
+        processes.stop_all()
 
 
 def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
@@ -65,13 +62,7 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
         wav.writeframes(np.round(session * 32767).astype("<i2").tobytes())
     texts: List[str] = []
     subscriber = rospy.Subscriber(TEXT_TOPIC, std_msgs.String, lambda message: texts.append(message.data))
-    node = subprocess.Popen(
-        [sys.executable, str(ROOT / "scripts" / "speech_event_application.py"), "--recognizer", "fake"],
-        env=roscore,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
-    )
+    processes, _ = _start_node(roscore, tmp_path)
     try:
         wait_for(lambda: subscriber.get_num_connections() > 0, "the node's text publisher", 60)
         driver = subprocess.run(
@@ -91,5 +82,4 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
         wait_for(lambda: texts == ["open the door"], "the text", 10)
     finally:
         subscriber.unregister()
-        os.killpg(node.pid, signal.SIGINT)
-        node.wait(20)
+        processes.stop_all()
