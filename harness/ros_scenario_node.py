@@ -7,7 +7,7 @@ from typing import List, Optional
 
 from harness.catalog import engine_for
 from harness.scenario import ScenarioError, add_scenario_arguments, scenario_from_arguments
-from speech_event.application import build_recognizer, run, without_remappings
+from speech_event.application import build_recognizer, build_screen, run, without_remappings
 from speech_event.config import ConfigError
 
 
@@ -19,8 +19,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         scenario = scenario_from_arguments(arguments)
         engine, config = engine_for(scenario.recognizer, scenario.config)
         recognizer = build_recognizer(config, engine)
+        screen = build_screen(config)
     except (ConfigError, ScenarioError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(config, recognizer)
+    run(config, recognizer, engine, screen)
     return 0

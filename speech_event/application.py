@@ -14,7 +14,8 @@ from typing import List, Optional
 from speech_event.asr.errors import ModelError
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 from speech_event.ports import Recognizer
-from speech_event.recognizers import RECOGNIZERS
+from speech_event.recognizers import RECOGNIZERS, engine_builder
+from speech_event.speech_screen import SpeechScreen, speech_screen_for
 
 NODE_NAME = "speechEvent"
 SHUTDOWN_GRACE_SECONDS = 2.0
@@ -42,7 +43,15 @@ def build_recognizer(config: SpeechEventConfig, name: str) -> Recognizer:
         raise ConfigError(str(problem)) from None
 
 
-def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
+def build_screen(config: SpeechEventConfig) -> SpeechScreen:
+    """What decides an utterance is not speech, or ConfigError (the VAD model is missing)."""
+    try:
+        return speech_screen_for(config)
+    except ModelError as problem:
+        raise ConfigError(str(problem)) from None
+
+
+def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: SpeechScreen) -> None:
     # Only the ROS entry point needs the ROS adapters (and so rospy).
     from speech_event.adapters.executors import ThreadExecutor
     from speech_event.adapters.ros import RosClock, RosTransport, start_ros_node, wait_for_shutdown
@@ -50,7 +59,9 @@ def run(config: SpeechEventConfig, recognizer: Recognizer) -> None:
 
     start_ros_node(NODE_NAME, verbose=config.verbose_mode)
     executor = ThreadExecutor()
-    node = SpeechEventNode(config, RosTransport(), RosClock(), recognizer, executor)
+    node = SpeechEventNode(
+        config, RosTransport(), RosClock(), recognizer, executor, engine_builder(name, config), screen
+    )
     node.start()
     wait_for_shutdown()
     node.stop()
@@ -74,8 +85,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         config = load_config(arguments.config)
         recognizer = build_recognizer(config, arguments.recognizer)
+        screen = build_screen(config)
     except ConfigError as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(config, recognizer)
+    run(config, recognizer, arguments.recognizer, screen)
     return 0

@@ -1,7 +1,9 @@
-"""The node's configuration: the seed's Table 1 keys plus the timing keys.
+"""The node's configuration: the seed's Table 1 keys, the timing keys, and the robot's release keys.
 
 ``config/speech_event_configuration.ini`` holds these defaults; see speech_event/keyvalue.py for
-the file format and README.md for every key.
+the file format and README.md for every key. The robot's current release (v1.1) names some keys
+its own way (``interUtteranceLen``, ``maxUtteranceLen``): those spellings are aliases here, so its
+configuration file loads unchanged.
 """
 
 from dataclasses import dataclass
@@ -44,6 +46,16 @@ class SpeechEventConfig:
     # grammar (a JSGF file or a list of phrases), or a keyword list.
     pocketsphinx_grammar: str = ""
     pocketsphinx_keywords: str = ""
+    # The robot's model family for the NeMo-format engines (rw_model_path, en_model_path).
+    model: str = "conformer-transducer"
+    # Utterances shorter than this are not transcribed (not speech: a cough, a door).
+    min_utterance_length: float = 0.0
+    # Silero VAD: an utterance whose highest speech probability stays below this is not
+    # transcribed; 0 turns the check off.
+    vad_threshold: float = 0.0
+
+
+MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
 
 
 # Keys that name files; a scenario's relative paths are taken from the scenario's folder.
@@ -77,7 +89,12 @@ _FORMAT = KeyValueFormat(
             text, "a JSGF file or a file of phrases, one a line; empty: language model"
         ),
         "pocketsphinx_keywords": KeyRule(text, "a keyword list file (pocketsphinx kws format); empty: none"),
+        "model": KeyRule(choice(*MODEL_FAMILIES), " or ".join(MODEL_FAMILIES)),
+        "min_utterance_length": seconds(0.0, 300.0),
+        "vad_threshold": KeyRule(number(float, 0.0, 1.0), "a speech probability from 0 to 1; 0: no check"),
     },
+    # The robot's v1.1 spellings.
+    aliases={"interUtteranceLen": "speech_pause_period", "maxUtteranceLen": "max_utterance_length"},
 )
 
 

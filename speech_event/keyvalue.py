@@ -10,7 +10,7 @@ import dataclasses
 import difflib
 import re
 from pathlib import Path
-from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Type, TypeVar, Union
+from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Optional, Type, TypeVar, Union
 
 
 class ConfigError(Exception):
@@ -87,7 +87,9 @@ Config = TypeVar("Config")
 class KeyValueFormat(Generic[Config]):
     """How the keys of one dataclass are written in a file, and checked."""
 
-    def __init__(self, config_type: Type[Config], rules: Dict[str, KeyRule]) -> None:
+    def __init__(
+        self, config_type: Type[Config], rules: Dict[str, KeyRule], aliases: Optional[Mapping[str, str]] = None
+    ) -> None:
         fields = {field.name for field in dataclasses.fields(config_type)}  # type: ignore[arg-type]
         assert set(rules) == fields, "every field needs a rule, and every rule a field"
         self._type = config_type
@@ -97,6 +99,9 @@ class KeyValueFormat(Generic[Config]):
         for key in rules:
             self._spellings[key] = key
             self._spellings[_camel_case(key)] = key
+        for alias, key in (aliases or {}).items():
+            assert key in rules, f"alias {alias} of unknown key {key}"
+            self._spellings[alias] = key
 
     def _unknown_key(self, where: str, key: str) -> ConfigError:
         close = difflib.get_close_matches(key, list(self._spellings), n=1, cutoff=0.6)

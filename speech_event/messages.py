@@ -43,3 +43,101 @@ class String:
 def message_type_name(message: object) -> str:
     """The ROS type name of a message, or its Python class name when it has none."""
     return str(getattr(message, "_type", type(message).__name__))
+
+
+# -- the services the Behaviour Controller calls (srv/SetEnabled.srv, srv/SetLanguage.srv) ---------
+
+
+@dataclass(frozen=True)
+class SetEnabledRequest:
+    status: str = ""
+
+
+@dataclass(frozen=True)
+class SetEnabledResponse:
+    response: int = 0  # int8: 1 accepted, 0 rejected
+
+
+@dataclass(frozen=True)
+class SetLanguageRequest:
+    language: str = ""
+
+
+@dataclass(frozen=True)
+class SetLanguageResponse:
+    response: int = 0  # int8: 1 accepted, 0 rejected
+
+
+@dataclass(frozen=True)
+class ServiceType:
+    """A service definition: the ROS type name and the request and response classes."""
+
+    name: str
+    request: type
+    response: type
+
+
+SET_ENABLED = ServiceType("speech_event/SetEnabled", SetEnabledRequest, SetEnabledResponse)
+SET_LANGUAGE = ServiceType("speech_event/SetLanguage", SetLanguageRequest, SetLanguageResponse)
+
+
+# -- the action (action/RecogniseSpeech.action) ----------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RecogniseSpeechGoal:
+    wait: float = 0.0  # float32: seconds to wait for speech to start
+
+
+@dataclass(frozen=True)
+class RecogniseSpeechResult:
+    transcription: str = ""
+
+
+@dataclass(frozen=True)
+class RecogniseSpeechFeedback:
+    progress: int = 0  # int8: 0 to 100
+
+
+@dataclass(frozen=True)
+class ActionType:
+    """An action definition: the ROS type name and the goal, result and feedback classes."""
+
+    name: str
+    goal: type
+    result: type
+    feedback: type
+
+
+RECOGNISE_SPEECH = ActionType(
+    "speech_event/RecogniseSpeech", RecogniseSpeechGoal, RecogniseSpeechResult, RecogniseSpeechFeedback
+)
+
+
+# -- /diagnostics (diagnostic_msgs/DiagnosticArray) -------------------------------------------------
+
+
+@dataclass(frozen=True)
+class KeyValue:
+    key: str
+    value: str
+
+
+@dataclass(frozen=True)
+class DiagnosticStatus:
+    OK: ClassVar[int] = 0
+    WARN: ClassVar[int] = 1
+    ERROR: ClassVar[int] = 2
+
+    level: int
+    name: str
+    message: str
+    hardware_id: str = ""
+    values: Tuple[KeyValue, ...] = ()
+
+
+@dataclass(frozen=True)
+class DiagnosticArray:
+    _type: ClassVar[str] = "diagnostic_msgs/DiagnosticArray"
+    stamp: float  # seconds on the node's clock; the ROS adapter makes it the header's stamp
+    status: Tuple[DiagnosticStatus, ...] = ()

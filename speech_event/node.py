@@ -1,20 +1,44 @@
 """The Speech Event node: message in -> validate -> assemble -> resample -> recognize -> publish.
 
 Everything it touches comes through its constructor: the transport, the clock, the recognizer and
-the executor that runs recognition off the subscriber callback. It reads no wall clock and keeps
-no module state, so the same object runs on the in-memory bus, on a real roscore, and on the robot.
+the executor that runs recognition off the subscriber callback. It reads no clock but the one it is
+given (the stopwatch only times recognitions for diagnostics) and keeps no module state, so the
+same object runs on the in-memory bus, on a real roscore, and on the robot.
+
+This module is the wiring. The steps live in their own modules (validate, assembly, resample,
+speech_screen, transcript_text), and so do the robot's interfaces around them: the services
+(control), the recognise_speech action (listen_action) and /diagnostics (diagnostics).
 """
 
 import logging
 import threading
-from typing import Dict, List, Optional
+import time
+from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
 from speech_event import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, TEXT_TOPIC
 from speech_event.assembly import UtteranceAssembler
 from speech_event.config import SpeechEventConfig
-from speech_event.messages import Float32MultiArray, String
+from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE, RuntimeControl
+from speech_event.diagnostics import (
+    DIAGNOSTICS_TOPIC,
+    DISCARDED_WHILE_DISABLED,
+    NodeState,
+    NodeStatistics,
+    diagnostic_array,
+)
+from speech_event.engines import EngineBuilder, LanguageEngines
+from speech_event.listen_action import ACTION_NAME, DISABLED, ListenAction
+from speech_event.messages import (
+    RECOGNISE_SPEECH,
+    SET_ENABLED,
+    SET_LANGUAGE,
+    DiagnosticArray,
+    DiagnosticStatus,
+    Float32MultiArray,
+    String,
+)
 from speech_event.periodic import Periodic
 from speech_event.ports import (
     Clock,
@@ -28,6 +52,7 @@ from speech_event.ports import (
 )
 from speech_event.rejections import RejectionLog
 from speech_event.resample import resample
+from speech_event.speech_screen import Discard, SpeechScreen, speech_screen_for
 from speech_event.storage import UtteranceStore
 from speech_event.transcript_text import text_to_publish
 from speech_event.validate import Rejection, validate_signal
@@ -46,25 +71,47 @@ class SpeechEventNode:
         clock: Clock,
         recognizer: Recognizer,
         executor: Executor,
+        build_engine: Optional[EngineBuilder] = None,
+        screen: Optional[SpeechScreen] = None,
+        stopwatch: Callable[[], float] = time.perf_counter,
     ) -> None:
+        """``recognizer`` transcribes ``config.language``; ``build_engine`` builds another language's
+        engine when set_language asks for it (without it, only the configured language is served).
+        ``screen`` decides what is not speech (default: built from the configuration)."""
         self._config = config
         self._transport = transport
         self._clock = clock
-        self._recognizer = recognizer
         self._executor = executor
+        self._stopwatch = stopwatch
+        self._screen = screen or speech_screen_for(config)
         self._max_samples = int(config.max_message_length * config.sample_rate)
         self._assembler = UtteranceAssembler(config.sample_rate, config.max_utterance_length)
         self._rejections = RejectionLog(clock.now, SIGNAL_TOPIC)
         self._store = (
             UtteranceStore(config.audio_storage_dir, config.sample_rate) if config.audio_storage_dir else None
         )
-        # The subscriber callback, the clock's timers and the recognition worker may each run on
-        # their own thread (rospy); this lock guards the assembler and the pause bookkeeping.
+        self._statistics = NodeStatistics()
+        self._action = ListenAction(clock, self._refusal)
+        self._control = RuntimeControl(
+            LanguageEngines(config.language, recognizer, build_engine),
+            lambda: self._language,
+            self.set_enabled,
+            self._use_engine,
+        )
+        # The subscriber callback, the clock's timers, the service handlers and the recognition
+        # worker may each run on their own thread (rospy); this lock guards the assembler, the
+        # pause bookkeeping, the engine in use and the enabled flag.
         self._lock = threading.Lock()
+        self._language = config.language
+        self._recognizer = recognizer
+        self._enabled = True
         self._last_arrival = 0.0
+        self._collecting_since: Optional[float] = None  # when the utterance being collected started
         self._pause_timer: Optional[Timer] = None
         self._utterances = 0
+        self._sound_detection = PublisherStatus.CONNECTED  # as the last health check found it
         self._text_publisher: Optional[Publisher] = None
+        self._diagnostics_publisher: Optional[Publisher] = None
         self._periodic: List[Periodic] = []
 
     @property
@@ -78,9 +125,23 @@ class SpeechEventNode:
         with self._lock:
             return self._assembler.pending_samples
 
+    @property
+    def language(self) -> str:
+        with self._lock:
+            return self._language
+
+    @property
+    def enabled(self) -> bool:
+        with self._lock:
+            return self._enabled
+
     def start(self) -> None:
         self._text_publisher = self._transport.advertise(TEXT_TOPIC, String)
+        self._diagnostics_publisher = self._transport.advertise(DIAGNOSTICS_TOPIC, DiagnosticArray)
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)
+        self._transport.serve(SET_ENABLED_SERVICE, SET_ENABLED, self._control.on_set_enabled)
+        self._transport.serve(SET_LANGUAGE_SERVICE, SET_LANGUAGE, self._control.on_set_language)
+        self._transport.serve_action(ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel)
         self._periodic.append(Periodic(self._clock, self._config.health_check_period, self._check_health))
         if self._config.verbose_mode and self._config.heartbeat_msg_period > 0:
             self._periodic.append(Periodic(self._clock, self._config.heartbeat_msg_period, self._heartbeat))
@@ -95,16 +156,26 @@ class SpeechEventNode:
                 self._pause_timer.cancel()
                 self._pause_timer = None
 
+    # -- message in -> validate -> assemble ---------------------------------------------------------
+
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition."""
         samples = validate_signal(message, self._max_samples)
         with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
+            if not self._enabled:  # the robot is speaking: its own voice is not to be transcribed
+                self._statistics.ignored_while_disabled()
+                return
             if isinstance(samples, Rejection):
                 self._rejections.record(samples)
                 return
             self._last_arrival = self._clock.now()
-            for utterance in self._assembler.add(samples):
-                self._submit(utterance)
+            if self._assembler.pending_samples == 0:
+                self._collecting_since = self._last_arrival
+                self._action.utterance_started(self._last_arrival)
+            completed = self._assembler.add(samples)
+            for index, utterance in enumerate(completed):
+                # Cut at the length limit: the speech goes on in the next utterance.
+                self._submit(utterance, index < len(completed) - 1 or self._assembler.pending_samples > 0)
             if self._pause_timer is None:
                 self._pause_timer = self._clock.call_at(
                     self._last_arrival + self._config.speech_pause_period, self._on_pause_timer
@@ -121,33 +192,109 @@ class SpeechEventNode:
                 return
             utterance = self._assembler.close()
             if utterance is not None:
-                self._submit(utterance)
+                self._submit(utterance, more_follows=False)
 
-    def _submit(self, audio: np.ndarray) -> None:
+    def _submit(self, audio: np.ndarray, more_follows: bool) -> None:
+        """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
         self._utterances += 1
-        number, closed_at = self._utterances, self._clock.now()
-        self._executor.submit(lambda: self._recognize_and_publish(number, closed_at, audio))
+        number, closed_at, recognizer = self._utterances, self._clock.now(), self._recognizer
+        started_at = self._collecting_since if self._collecting_since is not None else closed_at
+        if not more_follows:
+            self._collecting_since = None
+        self._statistics.queued(audio.size / self._config.sample_rate)
+        self._action.utterance_closed(number, started_at, more_follows)
+        self._executor.submit(lambda: self._recognize_and_publish(number, closed_at, audio, recognizer))
 
-    def _recognize_and_publish(self, number: int, closed_at: float, audio: np.ndarray) -> None:
+    # -- resample -> screen -> recognize -> publish (on the executor) -------------------------------
+
+    def _recognize_and_publish(
+        self, number: int, closed_at: float, audio: np.ndarray, recognizer: Recognizer
+    ) -> None:
         seconds = audio.size / self._config.sample_rate
+        discard: Optional[Discard] = None
+        text: Optional[str] = None
         try:
             if self._store is not None:
                 self._store.save(number, closed_at, audio)
-            speech = resample(audio, self._config.sample_rate, self._recognizer.sample_rate)
-            transcript = self._recognizer.transcribe(speech)
+            speech = resample(audio, self._config.sample_rate, recognizer.sample_rate)
+            discard = self._screen.discard(speech, recognizer.sample_rate)
+            if discard is None:
+                began = self._stopwatch()
+                transcript = recognizer.transcribe(speech)
+                self._statistics.transcribed(seconds, self._stopwatch() - began)
         except Exception:  # a failed recognition must not stop the node
             _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
             transcript = Transcript("")
-        text = text_to_publish(transcript, self._config)
-        _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
-        if text is not None:
-            self._publish(text)
+        finally:
+            self._statistics.finished(seconds)
+        if discard is not None:
+            self._statistics.discarded(discard.value)
+            _LOG.info("utterance %d (%.2f s) is not transcribed: %s", number, seconds, discard.value)
+        else:
+            text = text_to_publish(transcript, self._config)
+            _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
+            if text is not None:
+                self._publish(text)
+                self._statistics.published()
+        self._action.utterance_done(number, None if discard is not None else text or "")
+
+    # -- runtime control --------------------------------------------------------------------------
+
+    def set_enabled(self, enabled: bool) -> None:
+        """Disabled, arriving blocks are thrown away and the utterance being collected is dropped (it
+        is the robot's own voice); enabled again, the node starts clean. Health checks go on, and
+        recognitions already handed over still publish."""
+        with self._lock:
+            changed = enabled != self._enabled
+            self._enabled = enabled
+            if not enabled:
+                if self._pause_timer is not None:
+                    self._pause_timer.cancel()
+                    self._pause_timer = None
+                if self._assembler.close() is not None:
+                    self._statistics.discarded(DISCARDED_WHILE_DISABLED)
+                    self._action.utterance_dropped()
+                self._collecting_since = None
+        if changed:
+            _LOG.info("speechEvent %s", "enabled" if enabled else "disabled")
+        if not enabled:
+            self._action.disabled()
+
+    def _use_engine(self, language: str, recognizer: Recognizer) -> None:
+        with self._lock:  # utterances closed before this finish with the old engine
+            self._language, self._recognizer = language, recognizer
+        _LOG.info("speechEvent transcribes %s now", language)
+
+    def _refusal(self) -> Optional[str]:
+        """Why an action goal cannot listen now, or None."""
+        if not self.enabled:
+            return DISABLED
+        if self._transport.publisher_status(SIGNAL_TOPIC) is not PublisherStatus.CONNECTED:
+            return SOUND_DETECTION_DOWN
+        return None
+
+    # -- health and diagnostics -------------------------------------------------------------------
 
     def _check_health(self) -> None:
         status = self._transport.publisher_status(SIGNAL_TOPIC)
+        self._sound_detection = status
         if status is not PublisherStatus.CONNECTED:
+            self._publish(SOUND_DETECTION_DOWN)  # published first: a log call may be slow (rosout)
             _LOG.warning("soundDetection is down on %s: %s", SIGNAL_TOPIC, status.value)
-            self._publish(SOUND_DETECTION_DOWN)
+            self._action.sound_detection_down()
+        if self._diagnostics_publisher is not None:
+            self._diagnostics_publisher.publish(diagnostic_array(self._clock.now(), self.diagnostic_status()))
+
+    def diagnostic_status(self) -> DiagnosticStatus:
+        with self._lock:
+            state = NodeState(
+                engine=type(self._recognizer).__name__,
+                language=self._language,
+                enabled=self._enabled,
+                sound_detection=self._sound_detection,
+                rejected={reason.value: count for reason, count in self._rejections.counts.items()},
+            )
+        return self._statistics.status(state, [reason.value for reason in Discard])
 
     def _publish(self, text: str) -> None:
         if self._text_publisher is not None:  # None only before start()

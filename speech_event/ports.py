@@ -10,6 +10,8 @@ from typing import Callable, Optional, Protocol
 
 import numpy as np
 
+from speech_event.messages import ActionType, ServiceType
+
 
 class PublisherStatus(enum.Enum):
     """What the transport knows about the publishers of a topic."""
@@ -23,12 +25,45 @@ class Publisher(Protocol):
     def publish(self, message: object) -> None: ...
 
 
+class ActionGoal(Protocol):
+    """One goal of an action, as its server sees it (actionlib's ServerGoalHandle)."""
+
+    @property
+    def goal(self) -> object: ...
+
+    def accept(self) -> None: ...
+
+    def feedback(self, feedback: object) -> None: ...
+
+    def succeed(self, result: object) -> None: ...
+
+    def abort(self, result: object) -> None: ...
+
+    def cancel(self, result: object) -> None:
+        """End an accepted goal as preempted (a cancel request, or a newer goal took its place)."""
+        ...
+
+
 class Transport(Protocol):
     def advertise(self, topic: str, message_type: type) -> Publisher: ...
 
     def subscribe(self, topic: str, message_type: type, callback: Callable[[object], None]) -> None: ...
 
     def publisher_status(self, topic: str) -> PublisherStatus: ...
+
+    def serve(self, name: str, service: ServiceType, handler: Callable[[object], object]) -> None:
+        """Answer calls of service ``name``: ``handler`` takes a request and returns the response."""
+        ...
+
+    def serve_action(
+        self,
+        name: str,
+        action: ActionType,
+        on_goal: Callable[[ActionGoal], None],
+        on_cancel: Callable[[ActionGoal], None],
+    ) -> None:
+        """Serve action ``name``: ``on_goal`` for each new goal, ``on_cancel`` for a cancel request."""
+        ...
 
 
 class Timer(Protocol):

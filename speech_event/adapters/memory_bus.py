@@ -3,12 +3,15 @@
 Delivery is synchronous and in subscription order. Like the ROS master, it keeps publisher
 registrations per node name, so a publisher can leave cleanly (``shutdown``) or die leaving its
 registration behind (``crash``), and a node that comes back replaces its own stale registration.
+Services are called synchronously; action goals are tracked through actionlib's states.
 """
 
+import threading
 from collections import defaultdict
-from typing import Callable, DefaultDict, Dict, List
+from typing import Callable, DefaultDict, Dict, List, Optional, Tuple
 
-from speech_event.ports import PublisherStatus
+from speech_event.messages import ActionType, ServiceType
+from speech_event.ports import ActionGoal, PublisherStatus
 
 
 class MemoryPublisher:
@@ -33,10 +36,73 @@ class MemoryPublisher:
         self.alive = False
 
 
+class MemoryGoal:
+    """A goal sent on the bus: the server's handle (the ActionGoal port) and what its client sees.
+
+    States are actionlib's, in lower case: pending, active, then one of succeeded, aborted,
+    preempted (cancelled while active) or recalled (cancelled before it was accepted).
+    """
+
+    def __init__(self, goal: object, on_end: Callable[["MemoryGoal"], None]) -> None:
+        self._goal = goal
+        self._on_end = on_end
+        self._lock = threading.Lock()
+        self.state = "pending"
+        self.result: Optional[object] = None
+        self.feedbacks: List[object] = []
+
+    @property
+    def goal(self) -> object:
+        return self._goal
+
+    @property
+    def done(self) -> bool:
+        return self.state not in ("pending", "active")
+
+    def accept(self) -> None:
+        self._move(("pending",), "active")
+
+    def feedback(self, feedback: object) -> None:
+        with self._lock:
+            if self.state != "active":
+                raise RuntimeError(f"feedback on a goal that is {self.state}")
+            self.feedbacks.append(feedback)
+
+    def succeed(self, result: object) -> None:
+        self._move(("active",), "succeeded", result)
+
+    def abort(self, result: object) -> None:
+        self._move(("active",), "aborted", result)
+
+    def cancel(self, result: object) -> None:
+        self._move(("active", "pending"), "preempted" if self.state == "active" else "recalled", result)
+
+    def _move(self, allowed: Tuple[str, ...], state: str, result: Optional[object] = None) -> None:
+        # actionlib logs and ignores a transition its state machine does not allow; a test
+        # double should fail loudly instead, so a bug in the server shows.
+        with self._lock:
+            if self.state not in allowed:
+                raise RuntimeError(f"a goal that is {self.state} cannot become {state}")
+            self.state = state
+            self.result = result
+        if self.done:
+            self._on_end(self)
+
+
+class _ActionServer:
+    def __init__(self, on_goal: Callable[[ActionGoal], None], on_cancel: Callable[[ActionGoal], None]) -> None:
+        self.on_goal = on_goal
+        self.on_cancel = on_cancel
+
+
 class InMemoryBus:
     def __init__(self) -> None:
         self._subscribers: DefaultDict[str, List[Callable[[object], None]]] = defaultdict(list)
         self._publishers: DefaultDict[str, Dict[str, MemoryPublisher]] = defaultdict(dict)
+        self._services: Dict[str, Callable[[object], object]] = {}
+        self._actions: Dict[str, _ActionServer] = {}
+        # Every goal that has ended, in the order it ended, on any action.
+        self.ended_goals: List[MemoryGoal] = []
 
     def advertise(self, topic: str, message_type: type, node: str = "speechEvent") -> MemoryPublisher:
         publisher = MemoryPublisher(self, topic, node)
@@ -61,3 +127,37 @@ class InMemoryBus:
     def unregister(self, publisher: MemoryPublisher) -> None:
         if self._publishers[publisher.topic].get(publisher.node) is publisher:
             del self._publishers[publisher.topic][publisher.node]
+
+    # -- services ---------------------------------------------------------------------------------
+
+    def serve(self, name: str, service: ServiceType, handler: Callable[[object], object]) -> None:
+        self._services[name] = handler
+
+    def has_service(self, name: str) -> bool:
+        return name in self._services
+
+    def call(self, name: str, request: object) -> object:
+        """Call service ``name``, as rospy.ServiceProxy does: KeyError when nobody serves it."""
+        return self._services[name](request)
+
+    # -- actions ----------------------------------------------------------------------------------
+
+    def serve_action(
+        self,
+        name: str,
+        action: ActionType,
+        on_goal: Callable[[ActionGoal], None],
+        on_cancel: Callable[[ActionGoal], None],
+    ) -> None:
+        self._actions[name] = _ActionServer(on_goal, on_cancel)
+
+    def send_goal(self, name: str, goal: object) -> MemoryGoal:
+        """Send a goal to action ``name``; the returned object follows its state and result."""
+        server = self._actions[name]
+        handle = MemoryGoal(goal, self.ended_goals.append)
+        server.on_goal(handle)
+        return handle
+
+    def cancel_goal(self, name: str, handle: MemoryGoal) -> None:
+        if not handle.done:
+            self._actions[name].on_cancel(handle)

@@ -5,19 +5,30 @@ otherwise, for English, the embedded pocketsphinx engine. Engines import their r
 chosen, so the node itself needs neither onnxruntime nor pocketsphinx.
 """
 
+import dataclasses
 from typing import Callable, Dict
 
 from speech_event.asr.errors import ModelError
 from speech_event.config import SpeechEventConfig
+from speech_event.engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
 RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
 
 
+def _conformer_transducer_only(config: SpeechEventConfig) -> None:
+    if config.model != "conformer-transducer":
+        raise ModelError(
+            f"model {config.model}: this release runs only the conformer-transducer family "
+            f"(model conformer-transducer); the {config.model} engine is not available yet"
+        )
+
+
 def nemo(config: SpeechEventConfig) -> Recognizer:
     from speech_event.asr.engine import NemoTransducerRecognizer
 
+    _conformer_transducer_only(config)
     key = "rw_model_path" if config.language == "kinyarwanda" else "en_model_path"
     path = getattr(config, key)
     if not path:
@@ -37,6 +48,7 @@ def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
 
 
 def auto(config: SpeechEventConfig) -> Recognizer:
+    _conformer_transducer_only(config)  # never fall back silently from the family asked for
     if config.language == "english" and not config.en_model_path:
         return pocketsphinx(config)
     return nemo(config)
@@ -48,3 +60,8 @@ RECOGNIZERS: Dict[str, RecognizerFactory] = {
     "pocketsphinx": pocketsphinx,
     "fake": lambda config: ToneRecognizer(),
 }
+
+
+def engine_builder(name: str, config: SpeechEventConfig) -> EngineBuilder:
+    """Builds engine ``name`` for another language with the same configuration (set_language)."""
+    return lambda language: RECOGNIZERS[name](dataclasses.replace(config, language=language))

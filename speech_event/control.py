@@ -1,0 +1,83 @@
+"""Runtime control: the services the robot's Behaviour Controller calls.
+
+``/speechEvent/set_enabled`` (``string status`` -> ``int8 response``): "true" or "false", trimmed,
+in any case, answers 1; anything else answers 0 with a warning naming what is allowed. The robot
+disables the node while it speaks, so it never transcribes its own voice.
+
+``/speechEvent/set_language`` (``string language`` -> ``int8 response``): "english" or
+"kinyarwanda", trimmed, in any case ("English" is what the Behaviour Controller sends). The new
+language's engine is built here, on the service's thread; one that cannot be built answers 0, says
+why, and the old language goes on.
+"""
+
+import logging
+from typing import Callable
+
+from speech_event.asr.errors import ModelError
+from speech_event.engines import LanguageEngines
+from speech_event.messages import SetEnabledResponse, SetLanguageResponse
+from speech_event.ports import Recognizer
+
+_LOG = logging.getLogger("speech_event")
+
+SET_ENABLED_SERVICE = "/speechEvent/set_enabled"
+SET_LANGUAGE_SERVICE = "/speechEvent/set_language"
+ENABLED_VALUES = {"true": True, "false": False}
+LANGUAGES = ("english", "kinyarwanda")
+ACCEPTED, REJECTED = 1, 0
+
+
+class RuntimeControl:
+    def __init__(
+        self,
+        engines: LanguageEngines,
+        current_language: Callable[[], str],
+        set_enabled: Callable[[bool], None],
+        use_engine: Callable[[str, Recognizer], None],
+    ) -> None:
+        self._engines = engines
+        self._current_language = current_language
+        self._set_enabled = set_enabled
+        self._use_engine = use_engine
+
+    def on_set_enabled(self, request: object) -> SetEnabledResponse:
+        status = str(getattr(request, "status", "")).strip().lower()
+        if status not in ENABLED_VALUES:
+            _LOG.warning(
+                "%s: status %r is not allowed; allowed: true or false (any case)",
+                SET_ENABLED_SERVICE,
+                getattr(request, "status", None),
+            )
+            return SetEnabledResponse(REJECTED)
+        self._set_enabled(ENABLED_VALUES[status])
+        return SetEnabledResponse(ACCEPTED)
+
+    def on_set_language(self, request: object) -> SetLanguageResponse:
+        language = str(getattr(request, "language", "")).strip().lower()
+        if language not in LANGUAGES:
+            _LOG.warning(
+                "%s: language %r is not allowed; allowed: english or kinyarwanda (any case)",
+                SET_LANGUAGE_SERVICE,
+                getattr(request, "language", None),
+            )
+            return SetLanguageResponse(REJECTED)
+        if language == self._current_language():
+            return SetLanguageResponse(ACCEPTED)
+        try:
+            engine = self._engines.engine(language)
+        except ModelError as problem:
+            _LOG.error(
+                "%s: cannot switch to %s, staying with %s: %s",
+                SET_LANGUAGE_SERVICE,
+                language,
+                self._current_language(),
+                problem,
+            )
+            return SetLanguageResponse(REJECTED)
+        except Exception:  # a broken model file can fail in the runtime's own ways
+            _LOG.exception(
+                "%s: cannot switch to %s, staying with %s", SET_LANGUAGE_SERVICE, language, self._current_language()
+            )
+            return SetLanguageResponse(REJECTED)
+        self._use_engine(language, engine)
+        return SetLanguageResponse(ACCEPTED)

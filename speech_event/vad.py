@@ -1,0 +1,63 @@
+"""Silero VAD on onnxruntime: the highest speech probability in an utterance.
+
+The model is the ONNX file that the ``silero-vad`` wheel ships (``silero_vad/data/silero_vad.onnx``);
+install the wheel with ``pip install --no-deps silero-vad``, since its Python code imports torch,
+which the robot does not need: this module finds the file without importing the package. The
+model is stateful: 512-sample windows at 16 kHz, each with the 64 samples before it as context,
+and the recurrent state carried from one window to the next.
+"""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+from speech_event.asr.errors import ModelError
+
+SAMPLE_RATE = 16000
+WINDOW = 512
+CONTEXT = 64
+_STATE_SHAPE = (2, 1, 128)
+
+
+def silero_model_path() -> Path:
+    """The ONNX file of the installed silero-vad wheel, or ModelError saying how to install it."""
+    spec = importlib.util.find_spec("silero_vad")
+    origin = spec.origin if spec is not None else None
+    path = Path(origin).parent / "data" / "silero_vad.onnx" if origin else None
+    if path is None or not path.is_file():
+        raise ModelError(
+            "vad_threshold needs Silero VAD's ONNX model, shipped in the silero-vad wheel: "
+            "pip install --no-deps silero-vad (its torch dependency is not needed)"
+        )
+    return path
+
+
+class SileroVad:
+    def __init__(self, path: Path) -> None:
+        import onnxruntime
+
+        options = onnxruntime.SessionOptions()
+        options.log_severity_level = 3
+        # One thread: the VAD runs beside recognition, and a window is far too small to share out.
+        options.intra_op_num_threads = 1
+        options.inter_op_num_threads = 1
+        try:
+            self._session = onnxruntime.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+        except Exception as problem:  # onnxruntime raises its own exception types
+            raise ModelError(f"{path}: onnxruntime cannot load Silero VAD: {problem}") from None
+
+    def max_speech_probability(self, audio: np.ndarray) -> float:
+        """The highest speech probability over the windows of 16 kHz ``audio`` (0 if shorter than one)."""
+        state = np.zeros(_STATE_SHAPE, dtype=np.float32)
+        context = np.zeros(CONTEXT, dtype=np.float32)
+        rate = np.array(SAMPLE_RATE, dtype=np.int64)
+        samples = np.asarray(audio, dtype=np.float32)
+        highest = 0.0
+        for start in range(0, samples.size - WINDOW + 1, WINDOW):
+            window = samples[start : start + WINDOW]
+            framed = np.concatenate([context, window])[None, :]
+            probability, state = self._session.run(None, {"input": framed, "state": state, "sr": rate})
+            highest = max(highest, float(probability[0, 0]))
+            context = window[-CONTEXT:]
+        return highest
