@@ -9,9 +9,11 @@ import numpy as np
 
 from fixtures.audio import speak_tones
 from fixtures.tts import speak_tts
-from speech_event.config import SpeechEventConfig
+from speech_event.config import PATH_KEYS, SpeechEventConfig
+from speech_event.engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS as ENGINES
+from speech_event.recognizers import engine_builder
 
 
 @dataclass(frozen=True)
@@ -41,21 +43,42 @@ VOICES: Dict[str, Voice] = {
 FIXTURE_MODEL = "fixture-model"
 # The node's engines, plus the tones transducer built at test time (fixtures/tones_model.py).
 RECOGNIZERS = (*ENGINES, FIXTURE_MODEL)
+# A model path written so in a scenario's [config] is a model built at test time.
+FIXTURE_PREFIX = "fixture:"
+FIXTURE_TONES = "fixture:tones"
+
+
+def _tones_model() -> str:
+    from fixtures.tones_model import tones_model_directory
+
+    return str(tones_model_directory())
+
+
+def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
+    """``fixture:tones`` model paths made the directory of the tones transducer."""
+    built = {key: _tones_model() for key in PATH_KEYS if getattr(config, key) == FIXTURE_TONES}
+    return dataclasses.replace(config, **built) if built else config
 
 
 def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventConfig]:
     """The node's engine name and configuration for a scenario's recognizer.
 
-    The fixture model is a real model directory: the node loads it as its English NeMo model, in
-    memory and on ROS alike.
+    The fixture model is a real model directory: the node loads it as its NeMo model of both
+    languages (as the fake serves both), in memory and on ROS alike.
     """
+    config = _fixture_paths(config)
     if name != FIXTURE_MODEL:
         return name, config
-    from fixtures.tones_model import tones_model_directory
-
-    return "nemo", dataclasses.replace(config, language="english", en_model_path=str(tones_model_directory()))
+    tones = _tones_model()
+    return "nemo", dataclasses.replace(config, en_model_path=tones, rw_model_path=tones)
 
 
 def recognizer_for(name: str, config: SpeechEventConfig) -> Recognizer:
     engine, engine_config = engine_for(name, config)
     return ENGINES[engine](engine_config)
+
+
+def engine_builder_for(name: str, config: SpeechEventConfig) -> EngineBuilder:
+    """How the node builds another language's engine (set_language) for a scenario's recognizer."""
+    engine, engine_config = engine_for(name, config)
+    return engine_builder(engine, engine_config)

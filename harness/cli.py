@@ -10,7 +10,8 @@ from pathlib import Path
 from typing import Callable, List, Optional
 
 from harness.catalog import RECOGNIZERS, VOICES
-from harness.memory_runner import Published, run_in_memory
+from harness.memory_runner import run_in_memory
+from harness.outcome import Outcome
 from harness.report import passed, report
 from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
 from speech_event.asr.errors import ModelError
@@ -34,7 +35,7 @@ def _base_config(path: Optional[str]) -> SpeechEventConfig:
     return load_config(path) if path else SpeechEventConfig()
 
 
-def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scenario], List[Published]]:
+def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scenario], Outcome]:
     """How to play one scenario on the chosen transport."""
     if arguments.transport == "memory":
         return run_in_memory
@@ -52,9 +53,9 @@ def _run(arguments: argparse.Namespace) -> int:
     with ExitStack() as stack:
         play = _replays(arguments, stack)
         for scenario in scenarios:
-            published = play(scenario)
-            print(report(scenario, published), flush=True)
-            failures += not passed(scenario, published)
+            outcome = play(scenario)
+            print(report(scenario, outcome), flush=True)
+            failures += not passed(scenario, outcome)
     print(f"{len(scenarios) - failures} passed, {failures} failed")
     return 1 if failures else 0
 
@@ -87,7 +88,7 @@ def _demo(arguments: argparse.Namespace) -> int:
         f"speechEvent transcribes with {scenario.recognizer}{mode}"
     )
     try:
-        published = run_in_memory(scenario)
+        published = run_in_memory(scenario).published
     except ModelError as model_problem:
         raise ConfigError(str(model_problem)) from None
     for message in published:

@@ -1,46 +1,51 @@
 """Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic."""
 
-from dataclasses import dataclass
-from typing import List
-
-from harness.catalog import recognizer_for
+from harness.catalog import engine_builder_for, recognizer_for
+from harness.outcome import Outcome, Published, result_text
 from harness.scenario import Scenario
-from harness.timeline import ComeUp, GoDown, Publish, build_timeline
+from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
-from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
+from speech_event.listen_action import ACTION_NAME
 from speech_event.messages import Float32MultiArray, String, message_type_name
 from speech_event.node import SpeechEventNode
 
 SOUND_DETECTION = "soundDetection"
 
 
-@dataclass(frozen=True)
-class Published:
-    time: float
-    text: str
-
-
-def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[Published]:
-    """Every message the node published on /speechEvent/text, with its scenario time.
+def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> Outcome:
+    """Every message the node published on /speechEvent/text, with its scenario time, every service
+    response and every action result.
 
     ``recognition_seconds`` is how much scenario time each recognition takes.
     """
     timeline = build_timeline(scenario)
     clock = FakeClock()
     bus = InMemoryBus()
-    published: List[Published] = []
+    outcome = Outcome()
     bus.subscribe(
         TEXT_TOPIC,
         String,
-        lambda message: published.append(
+        lambda message: outcome.published.append(
             Published(clock.now(), message.data)  # type: ignore[attr-defined]
         ),
     )
+
+    def goal_ended(goal: MemoryGoal) -> None:
+        transcription = getattr(goal.result, "transcription", "")
+        outcome.results.append(Published(clock.now(), result_text(goal.state, transcription)))
+
+    bus.on_goal_end(goal_ended)
     executor = ClockExecutor(clock, recognition_seconds)
     node = SpeechEventNode(
-        scenario.config, bus, clock, recognizer_for(scenario.recognizer, scenario.config), executor
+        scenario.config,
+        bus,
+        clock,
+        recognizer_for(scenario.recognizer, scenario.config),
+        executor,
+        engine_builder_for(scenario.recognizer, scenario.config),
     )
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     node.start()
@@ -60,7 +65,11 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> List[
                 sound_detection.shutdown()
         elif isinstance(event, ComeUp):
             sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
+        elif isinstance(event, CallService):
+            outcome.responses.append(int(bus.call(event.service, event.request).response))  # type: ignore[attr-defined]
+        elif isinstance(event, SendGoal):
+            bus.send_goal(ACTION_NAME, event.goal)
     clock.advance_to(timeline.end)
     clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
     node.stop()
-    return published
+    return outcome

@@ -1,25 +1,54 @@
-"""One PASS/FAIL line per scenario; for a failure, a diff of expected versus published."""
+"""One PASS/FAIL line per scenario; for a failure, a diff of expected versus observed."""
 
 import difflib
-from typing import List, Sequence
+from typing import List, Optional, Sequence, Tuple
 
-from harness.memory_runner import Published
+from harness.outcome import Outcome, Published
 from harness.scenario import Scenario
 
 
-def passed(scenario: Scenario, published: Sequence[Published]) -> bool:
-    return [message.text for message in published] == list(scenario.expected)
+def _checks(scenario: Scenario, outcome: Outcome) -> List[Tuple[str, Sequence[str], Sequence[str]]]:
+    """(what, expected, observed) for each thing the scenario asserts."""
+    checks: List[Tuple[str, Sequence[str], Sequence[str]]] = [
+        ("published", scenario.expected, [message.text for message in outcome.published])
+    ]
+    if scenario.expected_responses is not None:
+        checks.append(
+            ("responses", [str(r) for r in scenario.expected_responses], [str(r) for r in outcome.responses])
+        )
+    if scenario.expected_results is not None:
+        checks.append(("results", scenario.expected_results, [result.text for result in outcome.results]))
+    return checks
 
 
-def report(scenario: Scenario, published: Sequence[Published]) -> str:
-    texts = [message.text for message in published]
-    if texts == list(scenario.expected):
-        return f"PASS  {scenario.name}  ({scenario.source}, {len(texts)} messages)"
+def passed(scenario: Scenario, outcome: Outcome) -> bool:
+    return all(list(expected) == list(observed) for _, expected, observed in _checks(scenario, outcome))
+
+
+def _timed(title: str, messages: Sequence[Published]) -> List[str]:
+    return [f"      {title}, with scenario times:"] + [
+        f"        t={message.time:8.3f} s  {message.text!r}" for message in messages
+    ]
+
+
+def report(scenario: Scenario, outcome: Outcome) -> str:
+    if passed(scenario, outcome):
+        return f"PASS  {scenario.name}  ({scenario.source}, {len(outcome.published)} messages)"
     lines: List[str] = [f"FAIL  {scenario.name}  ({scenario.source})"]
-    diff = difflib.unified_diff(
-        list(scenario.expected), texts, "expected", "published", lineterm="", n=len(texts) + 1
-    )
-    lines.extend("      " + line for line in diff)
-    lines.append("      published, with scenario times:")
-    lines.extend(f"        t={message.time:8.3f} s  {message.text!r}" for message in published)
+    for what, expected, observed in _checks(scenario, outcome):
+        if list(expected) == list(observed):
+            continue
+        label: Optional[str] = None if what == "published" else what
+        diff = difflib.unified_diff(
+            list(expected),
+            list(observed),
+            f"expected {label}" if label else "expected",
+            label or "published",
+            lineterm="",
+            n=len(observed) + 1,
+        )
+        lines.extend("      " + line for line in diff)
+    lines.extend(_timed("published", outcome.published))
+    if outcome.results:
+        lines.extend(_timed("action results", outcome.results))
     return "\n".join(lines)

@@ -9,7 +9,7 @@ from typing import List, Optional
 import rospy
 from std_msgs.msg import String
 
-from harness.memory_runner import Published
+from harness.outcome import Outcome, Published
 from harness.report import passed, report
 from harness.ros_sound_detection import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
@@ -33,5 +33,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     ready = rospy.Publisher(CHECKER_READY_TOPIC, String, queue_size=1, latch=True)
     ready.publish(String(data="listening"))
     rospy.wait_for_message(DONE_TOPIC, String)
-    print(report(scenario, published), flush=True)
-    return 0 if passed(scenario, published) else 1
+    outcome = Outcome(published)
+    print(report(scenario, outcome), flush=True)
+    return 0 if passed(scenario, outcome) else 1

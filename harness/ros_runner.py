@@ -29,7 +29,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from harness.catalog import engine_for
-from harness.memory_runner import Published
+from harness.outcome import Published
 from harness.scenario import ReplayError, Scenario
 from harness.timeline import ComeUp, Event, GoDown, Publish, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC

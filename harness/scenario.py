@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
-from harness.catalog import RECOGNIZERS, VOICES
+from harness.catalog import FIXTURE_PREFIX, RECOGNIZERS, VOICES
 from speech_event.config import PATH_KEYS, ConfigError, SpeechEventConfig, apply_overrides, load_config
 
 if sys.version_info >= (3, 11):
@@ -58,7 +58,28 @@ class Outage:
     kind: str = "shutdown"
 
 
-Step = Union[Say, Silence, Noise, Malformed, Outage]
+@dataclass(frozen=True)
+class Enable:
+    """A set_enabled call with this exact request string; takes no scenario time."""
+
+    request: str
+
+
+@dataclass(frozen=True)
+class Language:
+    """A set_language call with this exact request string; takes no scenario time."""
+
+    request: str
+
+
+@dataclass(frozen=True)
+class Listen:
+    """A recognise_speech goal with this wait; takes no scenario time (later steps run meanwhile)."""
+
+    wait: float
+
+
+Step = Union[Say, Silence, Noise, Malformed, Outage, Enable, Language, Listen]
 
 
 @dataclass(frozen=True)
@@ -68,6 +89,10 @@ class Scenario:
     config: SpeechEventConfig
     steps: Tuple[Step, ...]
     expected: Tuple[str, ...]
+    # Every service response, in call order, and every action result in the order the goals end
+    # (see harness/report.py for how a result is written); None: not checked.
+    expected_responses: Optional[Tuple[int, ...]] = None
+    expected_results: Optional[Tuple[str, ...]] = None
     voice: str = "tones"
     recognizer: str = "fake"
     background_noise_db: Optional[float] = None
@@ -91,6 +116,9 @@ _STEP_KEYS = {
     "noise": ("noise", "level_db"),
     "malformed": ("malformed",),
     "outage": ("outage", "kind"),
+    "enable": ("enable",),
+    "language": ("language",),
+    "listen": ("listen",),
 }
 
 
@@ -120,13 +148,22 @@ class _Reader:
             raise ScenarioError(f"{self._where}: '{key}' = {value!r} must be of type {names}")
         return value
 
-    def seconds(self, key: str) -> float:
+    def seconds(self, key: str, allow_zero: bool = False) -> float:
         value = float(self.get(key, (int, float)))
-        if not 0 < value <= 3600:
+        if not (0 <= value if allow_zero else 0 < value) or value > 3600:
+            lowest = "0 or more" if allow_zero else "above 0"
             raise ScenarioError(
-                f"{self._where}: '{key}' = {value} must be a number of seconds above 0 and at most 3600"
+                f"{self._where}: '{key}' = {value} must be a number of seconds {lowest} and at most 3600"
             )
         return value
+
+    def optional_list(self, key: str, kind: type, what: str) -> Optional[Tuple[Any, ...]]:
+        values = self.get(key, list, None)
+        if values is None:
+            return None
+        if not all(isinstance(value, kind) and not isinstance(value, bool) for value in values):
+            raise ScenarioError(f"{self._where}: '{key}' must be a list of {what}")
+        return tuple(values)
 
     def choice(self, key: str, options: Tuple[str, ...], default: Any = _REQUIRED) -> str:
         value = str(self.get(key, str, default))
@@ -159,6 +196,12 @@ def _step(table: Any, where: str) -> Step:
         return Noise(reader.seconds("noise"), float(reader.get("level_db", (int, float), DEFAULT_NOISE_DB)))
     if kind == "malformed":
         return Malformed(reader.choice("malformed", MALFORMED_KINDS))
+    if kind == "enable":
+        return Enable(reader.get("enable", str))
+    if kind == "language":
+        return Language(reader.get("language", str))
+    if kind == "listen":
+        return Listen(reader.seconds("listen", allow_zero=True))
     return Outage(reader.seconds("outage"), reader.choice("kind", OUTAGE_KINDS, "shutdown"))
 
 
@@ -166,7 +209,8 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
     top = _Reader(document, source, _TOP_KEYS)
     overrides = dict(top.get("config", dict, {}))
     for key in PATH_KEYS:  # a scenario's files are found next to it, wherever it is run from
-        if isinstance(overrides.get(key), str) and overrides[key]:
+        value = overrides.get(key)
+        if isinstance(value, str) and value and not value.startswith(FIXTURE_PREFIX):
             overrides[key] = str(Path(source).parent / overrides[key])
     try:
         config = apply_overrides(base_config, overrides, source + ": [config]")
@@ -174,10 +218,12 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         raise ScenarioError(str(config_error)) from None
     steps_table = top.get("steps", list)
     steps = tuple(_step(table, f"{source}: steps[{number}]") for number, table in enumerate(steps_table))
-    expect = _Reader(top.get("expect", dict), source + ": [expect]", ("published",))
+    expect = _Reader(top.get("expect", dict), source + ": [expect]", ("published", "responses", "results"))
     published = expect.get("published", list)
     if not all(isinstance(text, str) for text in published):
         raise ScenarioError(f"{source}: [expect]: 'published' must be a list of strings")
+    responses = expect.optional_list("responses", int, "integers (1 accepted, 0 rejected)")
+    results = expect.optional_list("results", str, "strings")
     voice = top.choice("voice", tuple(VOICES), "tones")
     for number, step in enumerate(steps):
         problem = VOICES[voice].problem_with(step.text) if isinstance(step, Say) else None
@@ -190,6 +236,8 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         config=config,
         steps=steps,
         expected=tuple(published),
+        expected_responses=responses,
+        expected_results=results,
         voice=voice,
         recognizer=top.choice("recognizer", RECOGNIZERS, "fake"),
         background_noise_db=None if noise_db is None else float(noise_db),

@@ -2,7 +2,8 @@
 
 Both transports play the same timeline, so a scenario means the same thing in memory and on ROS.
 soundDetection publishes 4096-sample blocks, each when it has been recorded (paced in real time);
-it is up at t = 0 and stays up and silent after the last step until the node's pause has passed.
+it is up at t = 0 and stays up and silent after the last step until the node's pause has passed
+(and every action goal's wait). Service calls and action goals take no scenario time.
 """
 
 from dataclasses import dataclass
@@ -13,8 +14,9 @@ import numpy as np
 from fixtures.audio import noise
 from fixtures.malformed import BLOCK_SAMPLES, malformed_message
 from harness.catalog import VOICES
-from harness.scenario import Malformed, Noise, Outage, Say, Scenario, Silence
-from speech_event.messages import Float32MultiArray
+from harness.scenario import Enable, Language, Listen, Malformed, Noise, Outage, Say, Scenario, Silence
+from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, SetEnabledRequest, SetLanguageRequest
 
 # After the last step the clock runs on for the pause period plus this, so the last utterance closes.
 SETTLE_SECONDS = 0.5
@@ -37,7 +39,20 @@ class ComeUp:
     time: float
 
 
-Event = Union[Publish, GoDown, ComeUp]
+@dataclass(frozen=True)
+class CallService:
+    time: float
+    service: str  # SET_ENABLED_SERVICE or SET_LANGUAGE_SERVICE
+    request: object
+
+
+@dataclass(frozen=True)
+class SendGoal:
+    time: float
+    goal: RecogniseSpeechGoal
+
+
+Event = Union[Publish, GoDown, ComeUp, CallService, SendGoal]
 
 
 @dataclass(frozen=True)
@@ -64,6 +79,7 @@ def build_timeline(scenario: Scenario) -> Timeline:
     voice = VOICES[scenario.voice]
     events: List[Event] = []
     time = 0.0
+    last_deadline = 0.0  # when the last action goal stops waiting for speech
     for step in scenario.steps:
         if isinstance(step, (Say, Noise)):
             if isinstance(step, Say):
@@ -86,4 +102,12 @@ def build_timeline(scenario: Scenario) -> Timeline:
             events.append(GoDown(time, step.kind))
             time += step.seconds
             events.append(ComeUp(time))
-    return Timeline(events, time + config.speech_pause_period + SETTLE_SECONDS)
+        elif isinstance(step, Enable):
+            events.append(CallService(time, SET_ENABLED_SERVICE, SetEnabledRequest(step.request)))
+        elif isinstance(step, Language):
+            events.append(CallService(time, SET_LANGUAGE_SERVICE, SetLanguageRequest(step.request)))
+        elif isinstance(step, Listen):
+            events.append(SendGoal(time, RecogniseSpeechGoal(step.wait)))
+            last_deadline = max(last_deadline, time + step.wait)
+    end = max(time + config.speech_pause_period, last_deadline) + SETTLE_SECONDS
+    return Timeline(events, end)

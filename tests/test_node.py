@@ -63,8 +63,8 @@ def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published
         steps=(Say("one"), Silence(1.6), Say("two"), Silence(1.6), Say("three")),
         expected=("one", "two", "three"),
     )
-    fast = run_in_memory(scenario)
-    slow = run_in_memory(scenario, recognition_seconds=3.0)
+    fast = run_in_memory(scenario).published
+    slow = run_in_memory(scenario, recognition_seconds=3.0).published
     assert [m.text for m in slow] == [m.text for m in fast] == ["one", "two", "three"]
     # One worker: each result comes 3 s after its utterance closed or after the previous result.
     assert slow[0].time == pytest.approx(fast[0].time + 3.0)

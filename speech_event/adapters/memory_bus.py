@@ -101,8 +101,7 @@ class InMemoryBus:
         self._publishers: DefaultDict[str, Dict[str, MemoryPublisher]] = defaultdict(dict)
         self._services: Dict[str, Callable[[object], object]] = {}
         self._actions: Dict[str, _ActionServer] = {}
-        # Every goal that has ended, in the order it ended, on any action.
-        self.ended_goals: List[MemoryGoal] = []
+        self._goal_end_callbacks: List[Callable[[MemoryGoal], None]] = []
 
     def advertise(self, topic: str, message_type: type, node: str = "speechEvent") -> MemoryPublisher:
         publisher = MemoryPublisher(self, topic, node)
@@ -154,9 +153,17 @@ class InMemoryBus:
     def send_goal(self, name: str, goal: object) -> MemoryGoal:
         """Send a goal to action ``name``; the returned object follows its state and result."""
         server = self._actions[name]
-        handle = MemoryGoal(goal, self.ended_goals.append)
+        handle = MemoryGoal(goal, self._goal_ended)
         server.on_goal(handle)
         return handle
+
+    def on_goal_end(self, callback: Callable[[MemoryGoal], None]) -> None:
+        """Call ``callback`` with each goal that ends, on any action, when it ends."""
+        self._goal_end_callbacks.append(callback)
+
+    def _goal_ended(self, goal: MemoryGoal) -> None:
+        for callback in self._goal_end_callbacks:
+            callback(goal)
 
     def cancel_goal(self, name: str, handle: MemoryGoal) -> None:
         if not handle.done:

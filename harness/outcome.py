@@ -1,0 +1,23 @@
+"""What a replay observed: the texts the node published, its service responses, its action results."""
+
+from dataclasses import dataclass, field
+from typing import List
+
+
+@dataclass(frozen=True)
+class Published:
+    time: float
+    text: str
+
+
+@dataclass
+class Outcome:
+    published: List[Published] = field(default_factory=list)
+    responses: List[int] = field(default_factory=list)
+    # One per action goal, in the order they ended, written by result_text.
+    results: List[Published] = field(default_factory=list)
+
+
+def result_text(state: str, transcription: str) -> str:
+    """A succeeded goal is its transcription; any other is its state in lower case, ': ' and it."""
+    return transcription if state == "succeeded" else f"{state}: {transcription}"
