@@ -3,20 +3,30 @@
 Audio arrives through rospy's numpy deserializer (np.frombuffer), so a 4096-float message costs
 no per-float Python work. Publisher status combines the master's registrations with the
 subscriber's live connections: a soundDetection killed with SIGKILL stays registered on the
-master but its connection is gone, and that reads as down.
+master but its connection is gone, and that reads as down. Services are rospy services and the
+action an actionlib ActionServer, over the classes genpy builds from srv/ and action/
+(speech_event/adapters/ros_interfaces.py); requests, goals and results cross as the plain
+dataclasses of speech_event.messages, field by field.
 """
 
+import dataclasses
+import importlib
 import logging
 import threading
-from typing import Callable, Dict
+from typing import Any, Callable, Dict
 
+import actionlib
 import rosgraph
 import rospy
+from diagnostic_msgs import msg as diagnostic_msgs
 from rospy.numpy_msg import numpy_msg
 from std_msgs import msg as std_msgs
 
 from speech_event import messages
-from speech_event.ports import PublisherStatus
+from speech_event.adapters import ros_interfaces
+from speech_event.ports import ActionGoal, PublisherStatus
+
+ros_interfaces.ensure_built()
 
 _LOG = logging.getLogger("speech_event")
 
@@ -30,6 +40,19 @@ AUDIO_BUFFER_BYTES = 1 << 24
 def _to_ros(message: object) -> object:
     if isinstance(message, messages.String):
         return std_msgs.String(data=message.data)
+    if isinstance(message, messages.DiagnosticArray):
+        statuses = [
+            diagnostic_msgs.DiagnosticStatus(
+                level=status.level,
+                name=status.name,
+                message=status.message,
+                hardware_id=status.hardware_id,
+                values=[diagnostic_msgs.KeyValue(key=v.key, value=v.value) for v in status.values],
+            )
+            for status in message.status
+        ]
+        header = std_msgs.Header(stamp=rospy.Time.from_sec(message.stamp))
+        return diagnostic_msgs.DiagnosticArray(header=header, status=statuses)
     if isinstance(message, messages.Float32MultiArray):
         dims = [std_msgs.MultiArrayDimension(d.label, d.size, d.stride) for d in message.layout.dim]
         layout = std_msgs.MultiArrayLayout(dim=dims, data_offset=message.layout.data_offset)
@@ -40,7 +63,58 @@ def _to_ros(message: object) -> object:
 _ROS_TYPES: Dict[type, type] = {
     messages.String: std_msgs.String,
     messages.Float32MultiArray: std_msgs.Float32MultiArray,
+    messages.DiagnosticArray: diagnostic_msgs.DiagnosticArray,
 }
+
+
+def _generated(type_name: str, kind: str) -> Any:
+    """The genpy class of ``package/Name`` in the package's ``msg`` or ``srv`` module."""
+    package, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+def _from_ros(ours: type, message: object) -> Any:
+    return ours(**{field.name: getattr(message, field.name) for field in dataclasses.fields(ours)})
+
+
+def _as_ros(ros_type: Any, message: object) -> Any:
+    return ros_type(**dataclasses.asdict(message))
+
+
+class RosActionGoal:
+    """The ActionGoal port over actionlib's ServerGoalHandle."""
+
+    def __init__(self, handle: Any, action: messages.ActionType, forget: Callable[[str], None]) -> None:
+        self._handle = handle
+        self._action = action
+        self._forget = forget
+        self.goal_id = str(handle.get_goal_id().id)
+        self._goal = _from_ros(action.goal, handle.get_goal())
+
+    @property
+    def goal(self) -> object:
+        return self._goal
+
+    def accept(self) -> None:
+        self._handle.set_accepted()
+
+    def feedback(self, feedback: object) -> None:
+        self._handle.publish_feedback(_as_ros(_generated(self._action.name + "Feedback", "msg"), feedback))
+
+    def succeed(self, result: object) -> None:
+        self._handle.set_succeeded(self._result(result))
+        self._forget(self.goal_id)
+
+    def abort(self, result: object) -> None:
+        self._handle.set_aborted(self._result(result))
+        self._forget(self.goal_id)
+
+    def cancel(self, result: object) -> None:
+        self._handle.set_canceled(self._result(result))
+        self._forget(self.goal_id)
+
+    def _result(self, result: object) -> Any:
+        return _as_ros(_generated(self._action.name + "Result", "msg"), result)
 
 
 class RosPublisher:
@@ -60,6 +134,11 @@ class RosPublisher:
 class RosTransport:
     def __init__(self) -> None:
         self._subscribers: Dict[str, rospy.Subscriber] = {}
+        self._services: Dict[str, rospy.Service] = {}
+        self._action_servers: Dict[str, actionlib.ActionServer] = {}
+        # Goals by id: actionlib hands the cancel callback a new handle object for the same goal.
+        self._goals: Dict[str, RosActionGoal] = {}
+        self._goals_lock = threading.Lock()
 
     def advertise(self, topic: str, message_type: type) -> RosPublisher:
         ros_type = _ROS_TYPES.get(message_type, message_type)
@@ -86,6 +165,43 @@ class RosTransport:
         if subscriber is None or subscriber.get_num_connections() > 0:
             return PublisherStatus.CONNECTED
         return PublisherStatus.STALE
+
+    def serve(self, name: str, service: messages.ServiceType, handler: Callable[[object], object]) -> None:
+        ros_service = _generated(service.name, "srv")
+
+        def answer(request: object) -> object:
+            return _as_ros(ros_service._response_class, handler(_from_ros(service.request, request)))
+
+        self._services[name] = rospy.Service(name, ros_service, answer)
+
+    def serve_action(
+        self,
+        name: str,
+        action: messages.ActionType,
+        on_goal: Callable[[ActionGoal], None],
+        on_cancel: Callable[[ActionGoal], None],
+    ) -> None:
+        def goal_arrived(handle: Any) -> None:
+            goal = RosActionGoal(handle, action, self._forget_goal)
+            with self._goals_lock:
+                self._goals[goal.goal_id] = goal
+            on_goal(goal)
+
+        def cancel_arrived(handle: Any) -> None:
+            with self._goals_lock:
+                goal = self._goals.get(str(handle.get_goal_id().id))
+            if goal is not None:
+                on_cancel(goal)
+
+        server = actionlib.ActionServer(
+            name, _generated(action.name + "Action", "msg"), goal_arrived, cancel_arrived, auto_start=False
+        )
+        server.start()
+        self._action_servers[name] = server
+
+    def _forget_goal(self, goal_id: str) -> None:
+        with self._goals_lock:
+            self._goals.pop(goal_id, None)
 
 
 # Time arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock is

@@ -1,0 +1,117 @@
+"""Builds the Python classes of the node's ROS interfaces (srv/, action/) with Debian's genpy.
+
+On the robot catkin builds them (CMakeLists.txt: add_service_files, add_action_files); for
+development and CI this is the build step, no catkin workspace needed:
+``speech-event build-ros-interfaces`` writes ``speech_event/msg`` and ``speech_event/srv`` next to
+the code, where catkin's install puts them too. The ROS adapter runs it on import when they are
+missing or older than their definitions. Actions go through actionlib_msgs' own genaction.py
+(Debian's libactionlib-msgs-dev) into the seven messages of an action, as catkin does.
+
+``generate`` also builds any other package's definitions: the tests build the robot's own client
+types (other names, same fields) this way and call the node through them.
+"""
+
+import fcntl
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Dict, List
+
+PACKAGE = "speech_event"
+ROOT = Path(__file__).resolve().parents[2]
+DEFINITIONS = ROOT  # srv/ and action/ live at the package root, as catkin wants them
+OUTPUT = Path(__file__).resolve().parents[1]  # speech_event/: its msg/ and srv/ subpackages
+GENACTION = Path("/usr/lib/actionlib_msgs/genaction.py")
+DEPENDENCIES = ("std_msgs", "actionlib_msgs")
+
+
+class InterfaceError(Exception):
+    """The interfaces cannot be built; the message says what is missing."""
+
+
+def _message_directory(package: str) -> str:
+    import rospkg
+
+    try:
+        return str(Path(rospkg.RosPack().get_path(package)) / "msg")
+    except rospkg.ResourceNotFound:
+        raise InterfaceError(
+            f"ROS package {package} not found: apt-get install ros-{package.replace('_', '-')}"
+        ) from None
+
+
+def _action_messages(action: Path, out: Path) -> List[Path]:
+    if not GENACTION.is_file():
+        raise InterfaceError(f"{GENACTION} not found: apt-get install libactionlib-msgs-dev")
+    before = set(out.glob("*.msg"))
+    subprocess.run([sys.executable, str(GENACTION), str(action), "-o", str(out)], check=True, capture_output=True)
+    return sorted(set(out.glob("*.msg")) - before)
+
+
+def generate(package: str, definitions: Path, out: Path) -> None:
+    """Python classes for ``definitions``/{msg,srv,action} as package ``package``, in ``out``/{msg,srv}."""
+    from genpy.generate_initpy import write_modules
+    from genpy.generator import MsgGenerator, SrvGenerator
+
+    with tempfile.TemporaryDirectory(prefix="ros_interfaces_") as work:
+        messages = Path(work) / "definitions"
+        messages.mkdir()
+        for own in sorted((definitions / "msg").glob("*.msg")):
+            shutil.copy(own, messages)
+        for action in sorted((definitions / "action").glob("*.action")):
+            _action_messages(action, messages)
+        search: Dict[str, List[str]] = {package: [str(messages)]}
+        search.update({dependency: [_message_directory(dependency)] for dependency in DEPENDENCIES})
+        built = Path(work) / "built"
+        for kind, generator, files in (
+            ("msg", MsgGenerator(), sorted(messages.glob("*.msg"))),
+            ("srv", SrvGenerator(), sorted((definitions / "srv").glob("*.srv"))),
+        ):
+            if not files:
+                continue
+            target = built / kind
+            if generator.generate_messages(package, [str(f) for f in files], str(target), search):
+                raise InterfaceError(f"genpy could not build the {kind} classes of {package}")
+            write_modules(str(target))
+        for kind in ("msg", "srv"):
+            if (built / kind).is_dir():
+                shutil.rmtree(out / kind, ignore_errors=True)
+                (built / kind).rename(out / kind)
+
+
+def _definitions() -> List[Path]:
+    return sorted([*(DEFINITIONS / "srv").glob("*.srv"), *(DEFINITIONS / "action").glob("*.action")])
+
+
+def _up_to_date() -> bool:
+    built = [OUTPUT / "msg" / "__init__.py", OUTPUT / "srv" / "__init__.py"]
+    if not all(path.is_file() for path in built):
+        return False
+    newest = max((path.stat().st_mtime for path in _definitions()), default=0.0)
+    return min(path.stat().st_mtime for path in built) >= newest
+
+
+def ensure_built() -> None:
+    """Build the node's interfaces unless catkin or an earlier run did (one process at a time)."""
+    if _up_to_date() or not _definitions():  # an install without the definitions has catkin's
+        return
+    with open(OUTPUT / ".ros_interfaces.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not _up_to_date():
+            generate(PACKAGE, DEFINITIONS, OUTPUT)
+
+
+def main() -> int:
+    try:
+        generate(PACKAGE, DEFINITIONS, OUTPUT)
+    except (InterfaceError, ImportError, subprocess.CalledProcessError) as problem:
+        print(f"error: cannot build the ROS interfaces: {problem}", file=sys.stderr)
+        return 2
+    print(f"built {OUTPUT / 'msg'} and {OUTPUT / 'srv'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
