@@ -87,10 +87,7 @@ def _demo(arguments: argparse.Namespace) -> int:
         f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)\n"
         f"speechEvent transcribes with {scenario.recognizer}{mode}"
     )
-    try:
-        published = run_in_memory(scenario).published
-    except ModelError as model_problem:
-        raise ConfigError(str(model_problem)) from None
+    published = run_in_memory(scenario).published
     for message in published:
         print(f"/speechEvent/text at t={message.time:.3f} s: {message.text!r}")
     return 0
@@ -129,7 +126,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
         return int(arguments.handler(arguments))
-    except (ConfigError, ScenarioError) as problem:
+    except (ConfigError, ScenarioError, ModelError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return USAGE_ERROR
     except ReplayError as problem:

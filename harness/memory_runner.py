@@ -25,17 +25,18 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> Outco
     clock = FakeClock()
     bus = InMemoryBus()
     outcome = Outcome()
+    played = 0
     bus.subscribe(
         TEXT_TOPIC,
         String,
         lambda message: outcome.published.append(
-            Published(clock.now(), message.data)  # type: ignore[attr-defined]
+            Published(clock.now(), message.data, played)  # type: ignore[attr-defined]
         ),
     )
 
     def goal_ended(goal: MemoryGoal) -> None:
         transcription = getattr(goal.result, "transcription", "")
-        outcome.results.append(Published(clock.now(), result_text(goal.state, transcription)))
+        outcome.results.append(Published(clock.now(), result_text(goal.state, transcription), played))
 
     bus.on_goal_end(goal_ended)
     executor = ClockExecutor(clock, recognition_seconds)
@@ -69,6 +70,7 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> Outco
             outcome.responses.append(int(bus.call(event.service, event.request).response))  # type: ignore[attr-defined]
         elif isinstance(event, SendGoal):
             bus.send_goal(ACTION_NAME, event.goal)
+        played += 1
     clock.advance_to(timeline.end)
     clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
     node.stop()

@@ -8,6 +8,9 @@ from typing import List
 class Published:
     time: float
     text: str
+    # How many of the timeline's events had been played when it came (in memory): a ROS replay
+    # waits for what came before the next event before it plays that event.
+    played: int = 0
 
 
 @dataclass

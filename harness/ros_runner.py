@@ -8,6 +8,7 @@ wall clock instead. Every process it starts is stopped again, also on failure or
 """
 
 import contextlib
+import dataclasses
 import os
 import shlex
 import signal
@@ -23,18 +24,31 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Set, Tuple
 
+import actionlib
 import rosgraph
 import rospy
+from actionlib_msgs.msg import GoalStatus
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from harness.catalog import engine_for
-from harness.outcome import Published
+from harness.memory_runner import run_in_memory
+from harness.outcome import Outcome, Published, result_text
 from harness.scenario import ReplayError, Scenario
-from harness.timeline import ComeUp, Event, GoDown, Publish, Timeline, build_timeline
+from harness.timeline import CallService, ComeUp, Event, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.adapters.ros import generated_class
 from speech_event.config import format_config
-from speech_event.messages import Float32MultiArray, message_type_name
+from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.listen_action import ACTION_NAME
+from speech_event.messages import (
+    RECOGNISE_SPEECH,
+    SET_ENABLED,
+    SET_LANGUAGE,
+    Float32MultiArray,
+    ServiceType,
+    message_type_name,
+)
 from speech_event.validate import Rejection, validate_signal
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,6 +60,16 @@ EVENT_TIMEOUT = 20.0
 # recognition runs and its text is published: the runner waits this long for that text.
 TIMER_SETTLE = 0.03
 TEXT_WAIT = 1.0
+SERVICES: Dict[str, ServiceType] = {SET_ENABLED_SERVICE: SET_ENABLED, SET_LANGUAGE_SERVICE: SET_LANGUAGE}
+# actionlib's terminal states, as a scenario's results name them.
+GOAL_STATES = {
+    GoalStatus.SUCCEEDED: "succeeded",
+    GoalStatus.ABORTED: "aborted",
+    GoalStatus.PREEMPTED: "preempted",
+    GoalStatus.RECALLED: "recalled",
+    GoalStatus.REJECTED: "rejected",
+    GoalStatus.LOST: "lost",
+}
 
 
 def _wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT_TIMEOUT) -> None:
@@ -158,9 +182,13 @@ class RosReplay:
         rospy.set_param("/use_sim_time", not options.real_time)
         rospy.init_node("speechEventReplay", disable_signals=True)
         self._clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
-        self._texts: List[Published] = []
+        self._outcome = Outcome()
         self._now = 0.0
         self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
+        action = generated_class(RECOGNISE_SPEECH.name + "Action", "msg")
+        self._action_client = actionlib.ActionClient(ACTION_NAME, action)
+        # A goal handle must be kept, or actionlib stops tracking its goal.
+        self._goals: List[actionlib.ClientGoalHandle] = []
 
     def _master_answers(self) -> bool:
         try:
@@ -170,7 +198,53 @@ class RosReplay:
             return False
 
     def _on_text(self, message: String) -> None:
-        self._texts.append(Published(self._now, message.data))
+        self._outcome.published.append(Published(self._now, message.data))
+
+    # -- the services and the action ------------------------------------------------------------
+
+    def _call(self, event: CallService) -> None:
+        service = SERVICES[event.service]
+        ros_service = generated_class(service.name, "srv")
+        try:
+            rospy.wait_for_service(event.service, timeout=EVENT_TIMEOUT)
+            request = ros_service._request_class(**dataclasses.asdict(event.request))
+            response = rospy.ServiceProxy(event.service, ros_service)(request)
+        except (rospy.ROSException, rospy.ServiceException) as problem:
+            raise ReplayError(f"calling {event.service}: {problem}") from None
+        self._outcome.responses.append(int(response.response))
+
+    def _send_goal(self, event: SendGoal) -> None:
+        goal_type = generated_class(RECOGNISE_SPEECH.name + "Goal", "msg")
+
+        def transition(handle: actionlib.ClientGoalHandle) -> None:
+            if handle.get_comm_state() == actionlib.CommState.DONE:
+                state = GOAL_STATES.get(handle.get_goal_status(), "unknown")
+                result = handle.get_result()
+                transcription = result.transcription if result is not None else ""
+                self._outcome.results.append(Published(self._now, result_text(state, transcription)))
+
+        handle = self._action_client.send_goal(goal_type(**dataclasses.asdict(event.goal)), transition)
+        self._goals.append(handle)
+        # Accepted at this clock time: the clock must not move before the node has it.
+        _wait_until(
+            lambda: handle.get_comm_state() in (actionlib.CommState.ACTIVE, actionlib.CommState.DONE),
+            "the node to accept the action goal",
+        )
+
+    def _catch_up(self, expected: Outcome, played: int) -> None:
+        """Wait (a while) for what the node published in memory by now, before the next event."""
+        if self._options.real_time:
+            return
+
+        def due(items: List[Published]) -> int:
+            return sum(1 for item in items if item.time <= self._now and item.played <= played)
+
+        texts, results = due(expected.published), due(expected.results)
+        deadline = time.monotonic() + TEXT_WAIT
+        while time.monotonic() < deadline and (
+            len(self._outcome.published) < texts or len(self._outcome.results) < results
+        ):
+            time.sleep(0.002)
 
     # -- the clock --------------------------------------------------------------------------------
 
@@ -229,34 +303,42 @@ class RosReplay:
 
     # -- playing ----------------------------------------------------------------------------------
 
-    def play(self, scenario: Scenario) -> List[Published]:
+    def play(self, scenario: Scenario) -> Outcome:
         timeline = build_timeline(scenario)
-        self._texts = []
+        # What the node does in memory tells when to wait for what; it is never what is compared.
+        expected = run_in_memory(scenario)
+        self._outcome = Outcome()
+        self._goals = []
         self._set_clock(0.0, time.monotonic())
         node = self._start_node(scenario)
         _wait_until(self._node_ready, "the node to subscribe and advertise", STARTUP_TIMEOUT)
+        if any(isinstance(event, SendGoal) for event in timeline.events):
+            if not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
+                raise ReplayError(f"the node serves no action {ACTION_NAME}")
         stand_in = _StandIn(self.processes, scenario.source, self._options.base_config, self._node_uri())
         closing_times = _utterance_closing_times(scenario, timeline)
         events_at: Dict[float, List[Tuple[int, Event]]] = defaultdict(list)
         for index, event in enumerate(timeline.events):
             events_at[event.time].append((index, event))
+        visits = _times_to_visit(scenario, timeline, closing_times, expected)
         wall_start = time.monotonic()
-        for when in _times_to_visit(scenario, timeline, closing_times):
+        played = 0
+        for when in visits:
             self._set_clock(when, wall_start)
-            if when in closing_times:
-                self._wait_for_a_text()
             for index, event in events_at.get(when, []):
-                stand_in.play(index, event, self._live_connections)
+                self._catch_up(expected, played)
+                if isinstance(event, CallService):
+                    self._call(event)
+                elif isinstance(event, SendGoal):
+                    self._send_goal(event)
+                else:
+                    stand_in.play(index, event, self._live_connections)
+                played = index + 1
+            self._catch_up(expected, played)
         stand_in.stop()
         self.processes.stop(node)
-        return list(self._texts)
-
-    def _wait_for_a_text(self) -> None:
-        """At an utterance's end, give its recognition time to publish before moving on."""
-        count = len(self._texts)
-        deadline = time.monotonic() + TEXT_WAIT
-        while len(self._texts) == count and time.monotonic() < deadline:
-            time.sleep(0.002)
+        outcome, self._outcome = self._outcome, Outcome()
+        return outcome
 
 
 class _StandIn:
@@ -335,8 +417,13 @@ def _utterance_closing_times(scenario: Scenario, timeline: Timeline) -> Set[floa
     }
 
 
-def _times_to_visit(scenario: Scenario, timeline: Timeline, closing_times: Set[float]) -> List[float]:
+def _times_to_visit(
+    scenario: Scenario, timeline: Timeline, closing_times: Set[float], expected: Outcome
+) -> List[float]:
+    """Every time something happens: events, health checks, utterance ends, and whatever else made
+    the node publish or end a goal in memory (an action goal's wait running out)."""
     period = scenario.config.health_check_period
     checks = {period * k for k in range(1, int(timeline.end / period) + 1)}
     events = {event.time for event in timeline.events}
-    return sorted({*events, *checks, *closing_times, timeline.end})
+    outputs = {item.time for item in [*expected.published, *expected.results]}
+    return sorted({*events, *checks, *closing_times, *outputs, timeline.end})

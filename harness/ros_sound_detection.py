@@ -22,7 +22,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
-from harness.timeline import ComeUp, GoDown, Publish, Timeline, build_timeline
+from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosPublisher, RosTransport
 from speech_event.application import without_remappings
@@ -117,6 +117,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 0
     if arguments.autonomous and any(isinstance(e, GoDown) and e.kind == "crash" for e in events):
         _say(f"error: {arguments.scenario} has a crash outage; replay it with python -m harness run")
+        return 2
+    if arguments.autonomous and any(isinstance(e, (CallService, SendGoal)) for e in events):
+        _say(
+            f"error: {arguments.scenario} calls services or sends action goals, which this stand-in "
+            "does not check; replay it with python -m harness run --transport ros"
+        )
         return 2
     rospy.init_node("soundDetection", disable_signals=not arguments.autonomous)
     publisher = RosTransport().advertise(SIGNAL_TOPIC, Float32MultiArray)

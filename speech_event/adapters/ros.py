@@ -67,7 +67,7 @@ _ROS_TYPES: Dict[type, type] = {
 }
 
 
-def _generated(type_name: str, kind: str) -> Any:
+def generated_class(type_name: str, kind: str) -> Any:
     """The genpy class of ``package/Name`` in the package's ``msg`` or ``srv`` module."""
     package, name = type_name.split("/")
     return getattr(importlib.import_module(f"{package}.{kind}"), name)
@@ -99,7 +99,7 @@ class RosActionGoal:
         self._handle.set_accepted()
 
     def feedback(self, feedback: object) -> None:
-        self._handle.publish_feedback(_as_ros(_generated(self._action.name + "Feedback", "msg"), feedback))
+        self._handle.publish_feedback(_as_ros(generated_class(self._action.name + "Feedback", "msg"), feedback))
 
     def succeed(self, result: object) -> None:
         self._handle.set_succeeded(self._result(result))
@@ -114,7 +114,7 @@ class RosActionGoal:
         self._forget(self.goal_id)
 
     def _result(self, result: object) -> Any:
-        return _as_ros(_generated(self._action.name + "Result", "msg"), result)
+        return _as_ros(generated_class(self._action.name + "Result", "msg"), result)
 
 
 class RosPublisher:
@@ -167,7 +167,7 @@ class RosTransport:
         return PublisherStatus.STALE
 
     def serve(self, name: str, service: messages.ServiceType, handler: Callable[[object], object]) -> None:
-        ros_service = _generated(service.name, "srv")
+        ros_service = generated_class(service.name, "srv")
 
         def answer(request: object) -> object:
             return _as_ros(ros_service._response_class, handler(_from_ros(service.request, request)))
@@ -194,7 +194,7 @@ class RosTransport:
                 on_cancel(goal)
 
         server = actionlib.ActionServer(
-            name, _generated(action.name + "Action", "msg"), goal_arrived, cancel_arrived, auto_start=False
+            name, generated_class(action.name + "Action", "msg"), goal_arrived, cancel_arrived, auto_start=False
         )
         server.start()
         self._action_servers[name] = server
