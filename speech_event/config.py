@@ -94,7 +94,11 @@ _FORMAT = KeyValueFormat(
         "vad_threshold": KeyRule(number(float, 0.0, 1.0), "a speech probability from 0 to 1; 0: no check"),
     },
     # The robot's v1.1 spellings.
-    aliases={"interUtteranceLen": "speech_pause_period", "maxUtteranceLen": "max_utterance_length"},
+    aliases={
+        "interUtteranceLen": "speech_pause_period",
+        "maxUtteranceLen": "max_utterance_length",
+        "minUtteranceLen": "min_utterance_length",
+    },
 )
 
 

@@ -90,7 +90,7 @@ class ListenAction:
         """
         with self._lock:
             self._collecting_since = started_at if more_follows else None
-            if self._goal is not None and started_at >= self._goal.accepted_at:
+            if self._goal is not None and started_at > self._goal.accepted_at:
                 self._goal.candidates.append(number)
 
     def utterance_dropped(self) -> None:
@@ -135,7 +135,7 @@ class ListenAction:
 
     def _timed_out(self, goal: _Goal) -> bool:
         """No speech that started after acceptance is being heard, and the wait is over."""
-        started = self._collecting_since is not None and self._collecting_since >= goal.accepted_at
+        started = self._collecting_since is not None and self._collecting_since > goal.accepted_at
         return not started and self._clock.now() >= goal.deadline
 
     def _arm(self, goal: _Goal, wait: float) -> None:
@@ -146,7 +146,7 @@ class ListenAction:
 
     def _tick(self, goal: _Goal, step: int) -> None:
         with self._lock:
-            hearing = self._collecting_since is not None and self._collecting_since >= goal.accepted_at
+            hearing = self._collecting_since is not None and self._collecting_since > goal.accepted_at
             if self._goal is not goal or hearing or goal.candidates:
                 return
             goal.progress = step * 100 // PROGRESS_STEPS

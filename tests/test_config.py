@@ -195,3 +195,80 @@ def test_the_deployment_node_refuses_a_bad_configuration_with_status_2_before_to
         result.stderr
         == f"error: {bad}:1: key 'verbose_mode': value 'maybe' is not a boolean; allowed: true or false\n"
     )
+
+
+ROBOT_V1_1 = ROOT / "config" / "robot_release_v1.1.ini"
+
+
+def test_the_configuration_file_of_the_robots_release_loads_unchanged() -> None:
+    # Exactly the robot's lines (reference.md, "The robot's current release (v1.1)").
+    assert ROBOT_V1_1.read_text() == (
+        "language\tenglish\nmodel\tconformer-transducer\nverboseMode\ttrue\ncuda\tfalse\n"
+        "confidence\t0.0\nvadThreshold\t0.0\nsampleRate\t48000\ninterUtteranceLen\t1.5\n"
+        "minUtteranceLen\t1.0\nmaxUtteranceLen\t15.0\nheartbeatMsgPeriod\t10\n"
+    )
+    assert load_config(ROBOT_V1_1) == SpeechEventConfig(
+        language="english",
+        model="conformer-transducer",
+        verbose_mode=True,
+        cuda=False,
+        confidence=0.0,
+        vad_threshold=0.0,
+        sample_rate=48000,
+        speech_pause_period=1.5,
+        min_utterance_length=1.0,
+        max_utterance_length=15.0,
+        heartbeat_msg_period=10.0,
+    )
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        (
+            "model\ttransformer",
+            "key 'model': value 'transformer' is not one of the choices; "
+            "allowed: conformer-transducer or parakeet or whisper",
+        ),
+        (
+            "vadThreshold 1.5",
+            "key 'vad_threshold': value '1.5' is out of range; allowed: a speech probability from 0 to 1; 0: no check",
+        ),
+        (
+            "minUtteranceLen -1",
+            "key 'min_utterance_length': value '-1' is out of range; allowed: a number of seconds from 0.0 to 300.0",
+        ),
+    ],
+)
+def test_the_robots_new_keys_are_checked(line: str, message: str) -> None:
+    with pytest.raises(ConfigError) as error:
+        parse_config(line, "robot.ini")
+    assert str(error.value) == f"robot.ini:1: {message}"
+
+
+@pytest.mark.parametrize("family", ["parakeet", "whisper"])
+def test_a_model_family_without_an_engine_yet_stops_the_node_with_status_2(tmp_path: Path, family: str) -> None:
+    robot = tmp_path / "robot.ini"
+    robot.write_text(ROBOT_V1_1.read_text().replace("conformer-transducer", family))
+    result = run_application("-c", str(robot))
+    assert result.returncode == 2
+    assert result.stderr == (
+        f"error: model {family}: this release runs only the conformer-transducer family "
+        f"(model conformer-transducer); the {family} engine is not available yet\n"
+    )
+
+
+def test_vad_threshold_without_the_silero_model_stops_the_node_saying_how_to_install_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import importlib.util
+
+    from speech_event.application import build_screen
+
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(ConfigError) as error:
+        build_screen(SpeechEventConfig(vad_threshold=0.5))
+    assert str(error.value) == (
+        "vad_threshold needs Silero VAD's ONNX model, shipped in the silero-vad wheel: "
+        "pip install --no-deps silero-vad (its torch dependency is not needed)"
+    )

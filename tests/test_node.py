@@ -20,39 +20,9 @@ from speech_event.ports import Executor, Recognizer, Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.resample import resample
 from tests.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
+from tests.rig import AT_16K, Rig
 
 
-class Rig:
-    """The node on the in-memory bus with a fake clock, and what it published."""
-
-    def __init__(
-        self, config: SpeechEventConfig, recognizer: Recognizer, executor: Optional[Executor] = None
-    ) -> None:
-        self.clock = FakeClock()
-        self.bus = InMemoryBus()
-        self.published: List[Tuple[float, str]] = []
-        self.bus.subscribe(TEXT_TOPIC, String, self._record)
-        self.node = SpeechEventNode(
-            config, self.bus, self.clock, recognizer, executor or ClockExecutor(self.clock)
-        )
-        self.sound_detection: MemoryPublisher = self.bus.advertise(
-            SIGNAL_TOPIC, Float32MultiArray, node="soundDetection"
-        )
-        self.node.start()
-
-    def _record(self, message: object) -> None:
-        self.published.append((self.clock.now(), message.data))  # type: ignore[attr-defined]
-
-    def speak(self, samples: np.ndarray, block: int = 4096) -> None:
-        for start in range(0, samples.size, block):
-            self.clock.advance(block / 16000)
-            self.sound_detection.publish(Float32MultiArray(data=samples[start : start + block]))
-
-    def texts(self) -> List[str]:
-        return [text for _, text in self.published]
-
-
-AT_16K = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0)
 
 
 def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published_in_order() -> None:
