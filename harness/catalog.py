@@ -3,7 +3,7 @@
 import dataclasses
 import re
 from dataclasses import dataclass
-from typing import Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -56,7 +56,9 @@ def _tones_model() -> str:
 
 def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
     """``fixture:tones`` model paths made the directory of the tones transducer."""
-    built = {key: _tones_model() for key in PATH_KEYS if getattr(config, key) == FIXTURE_TONES}
+    built: Dict[str, Any] = {
+        key: _tones_model() for key in PATH_KEYS if getattr(config, key) == FIXTURE_TONES
+    }
     return dataclasses.replace(config, **built) if built else config
 
 

@@ -207,7 +207,7 @@ class RosReplay:
         ros_service = generated_class(service.name, "srv")
         try:
             rospy.wait_for_service(event.service, timeout=EVENT_TIMEOUT)
-            request = ros_service._request_class(**dataclasses.asdict(event.request))
+            request = ros_service._request_class(**dataclasses.asdict(event.request))  # type: ignore[call-overload]
             response = rospy.ServiceProxy(event.service, ros_service)(request)
         except (rospy.ROSException, rospy.ServiceException) as problem:
             raise ReplayError(f"calling {event.service}: {problem}") from None
@@ -312,9 +312,9 @@ class RosReplay:
         self._set_clock(0.0, time.monotonic())
         node = self._start_node(scenario)
         _wait_until(self._node_ready, "the node to subscribe and advertise", STARTUP_TIMEOUT)
-        if any(isinstance(event, SendGoal) for event in timeline.events):
-            if not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
-                raise ReplayError(f"the node serves no action {ACTION_NAME}")
+        sends_goals = any(isinstance(event, SendGoal) for event in timeline.events)
+        if sends_goals and not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
+            raise ReplayError(f"the node serves no action {ACTION_NAME}")
         stand_in = _StandIn(self.processes, scenario.source, self._options.base_config, self._node_uri())
         closing_times = _utterance_closing_times(scenario, timeline)
         events_at: Dict[float, List[Tuple[int, Event]]] = defaultdict(list)

@@ -150,7 +150,7 @@ class _Reader:
 
     def seconds(self, key: str, allow_zero: bool = False) -> float:
         value = float(self.get(key, (int, float)))
-        if not (0 <= value if allow_zero else 0 < value) or value > 3600:
+        if not (value >= 0 if allow_zero else value > 0) or value > 3600:
             lowest = "0 or more" if allow_zero else "above 0"
             raise ScenarioError(
                 f"{self._where}: '{key}' = {value} must be a number of seconds {lowest} and at most 3600"

@@ -16,7 +16,12 @@ from fixtures.malformed import BLOCK_SAMPLES, malformed_message
 from harness.catalog import VOICES
 from harness.scenario import Enable, Language, Listen, Malformed, Noise, Outage, Say, Scenario, Silence
 from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
-from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, SetEnabledRequest, SetLanguageRequest
+from speech_event.messages import (
+    Float32MultiArray,
+    RecogniseSpeechGoal,
+    SetEnabledRequest,
+    SetLanguageRequest,
+)
 
 # After the last step the clock runs on for the pause period plus this, so the last utterance closes.
 SETTLE_SECONDS = 0.5

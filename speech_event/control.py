@@ -76,7 +76,10 @@ class RuntimeControl:
             return SetLanguageResponse(REJECTED)
         except Exception:  # a broken model file can fail in the runtime's own ways
             _LOG.exception(
-                "%s: cannot switch to %s, staying with %s", SET_LANGUAGE_SERVICE, language, self._current_language()
+                "%s: cannot switch to %s, staying with %s",
+                SET_LANGUAGE_SERVICE,
+                language,
+                self._current_language(),
             )
             return SetLanguageResponse(REJECTED)
         self._use_engine(language, engine)

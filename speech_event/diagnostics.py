@@ -98,7 +98,9 @@ class NodeStatistics:
                 for reason in [DISCARDED_WHILE_DISABLED, *discard_reasons]
             ]
             values.append(KeyValue("messages ignored while disabled", str(counts.ignored_while_disabled)))
-            values += [KeyValue(f"rejected messages: {reason}", str(n)) for reason, n in state.rejected.items()]
+            values += [
+                KeyValue(f"rejected messages: {reason}", str(n)) for reason, n in state.rejected.items()
+            ]
             values += _timing(counts.recognition_seconds, counts.audio_seconds)
             values += [
                 KeyValue("utterances waiting for recognition", str(counts.waiting)),

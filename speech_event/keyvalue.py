@@ -88,7 +88,10 @@ class KeyValueFormat(Generic[Config]):
     """How the keys of one dataclass are written in a file, and checked."""
 
     def __init__(
-        self, config_type: Type[Config], rules: Dict[str, KeyRule], aliases: Optional[Mapping[str, str]] = None
+        self,
+        config_type: Type[Config],
+        rules: Dict[str, KeyRule],
+        aliases: Optional[Mapping[str, str]] = None,
     ) -> None:
         fields = {field.name for field in dataclasses.fields(config_type)}  # type: ignore[arg-type]
         assert set(rules) == fields, "every field needs a rule, and every rule a field"

@@ -13,6 +13,7 @@ the goal handles only outside that lock, so it never holds a lock that a transpo
 (actionlib calls back under its server lock) could be waiting for.
 """
 
+import functools
 import math
 import threading
 from dataclasses import dataclass, field
@@ -141,7 +142,7 @@ class ListenAction:
     def _arm(self, goal: _Goal, wait: float) -> None:
         for step in range(1, PROGRESS_STEPS):
             when = goal.accepted_at + wait * step / PROGRESS_STEPS
-            goal.timers.append(self._clock.call_at(when, lambda step=step: self._tick(goal, step)))
+            goal.timers.append(self._clock.call_at(when, functools.partial(self._tick, goal, step)))
         goal.timers.append(self._clock.call_at(goal.deadline, lambda: self._on_deadline(goal)))
 
     def _tick(self, goal: _Goal, step: int) -> None:

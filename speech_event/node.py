@@ -141,7 +141,9 @@ class SpeechEventNode:
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)
         self._transport.serve(SET_ENABLED_SERVICE, SET_ENABLED, self._control.on_set_enabled)
         self._transport.serve(SET_LANGUAGE_SERVICE, SET_LANGUAGE, self._control.on_set_language)
-        self._transport.serve_action(ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel)
+        self._transport.serve_action(
+            ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel
+        )
         self._periodic.append(Periodic(self._clock, self._config.health_check_period, self._check_health))
         if self._config.verbose_mode and self._config.heartbeat_msg_period > 0:
             self._periodic.append(Periodic(self._clock, self._config.heartbeat_msg_period, self._heartbeat))

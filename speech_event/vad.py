@@ -43,7 +43,9 @@ class SileroVad:
         options.intra_op_num_threads = 1
         options.inter_op_num_threads = 1
         try:
-            self._session = onnxruntime.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+            self._session = onnxruntime.InferenceSession(
+                str(path), options, providers=["CPUExecutionProvider"]
+            )
         except Exception as problem:  # onnxruntime raises its own exception types
             raise ModelError(f"{path}: onnxruntime cannot load Silero VAD: {problem}") from None
 

@@ -247,7 +247,9 @@ def test_the_robots_new_keys_are_checked(line: str, message: str) -> None:
 
 
 @pytest.mark.parametrize("family", ["parakeet", "whisper"])
-def test_a_model_family_without_an_engine_yet_stops_the_node_with_status_2(tmp_path: Path, family: str) -> None:
+def test_a_model_family_without_an_engine_yet_stops_the_node_with_status_2(
+    tmp_path: Path, family: str
+) -> None:
     robot = tmp_path / "robot.ini"
     robot.write_text(ROBOT_V1_1.read_text().replace("conformer-transducer", family))
     result = run_application("-c", str(robot))

@@ -154,7 +154,9 @@ def test_an_utterance_closed_before_the_switch_finishes_with_the_old_engine() ->
 
 
 @given(st.lists(st.sampled_from(["speak", "close", "switch", "wait"]), max_size=30))
-def test_every_utterance_is_transcribed_once_by_the_engine_in_use_when_it_closed(operations: List[str]) -> None:
+def test_every_utterance_is_transcribed_once_by_the_engine_in_use_when_it_closed(
+    operations: List[str],
+) -> None:
     """Switches interleaved with utterances and slow recognitions (each takes 0.7 s of clock)."""
     engines = Engines()
     rig = Rig(AT_16K, engines.spies["english"], build_engine=engines.build, job_seconds=0.7)

@@ -1,7 +1,7 @@
 import logging
 import wave
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List
 
 import numpy as np
 import pytest
@@ -9,20 +9,18 @@ import pytest
 from fixtures.audio import speak_tones
 from harness.memory_runner import run_in_memory
 from harness.scenario import Say, Scenario, Silence
-from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
-from speech_event.adapters.memory_bus import InMemoryBus, MemoryPublisher
+from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig, apply_overrides
-from speech_event.messages import Float32MultiArray, String
+from speech_event.messages import Float32MultiArray
 from speech_event.node import SpeechEventNode
-from speech_event.ports import Executor, Recognizer, Transcript
+from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.resample import resample
 from tests.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
 from tests.rig import AT_16K, Rig
-
-
 
 
 def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published_in_order() -> None:

@@ -90,7 +90,9 @@ class MemoryGoal:
 
 
 class _ActionServer:
-    def __init__(self, on_goal: Callable[[ActionGoal], None], on_cancel: Callable[[ActionGoal], None]) -> None:
+    def __init__(
+        self, on_goal: Callable[[ActionGoal], None], on_cancel: Callable[[ActionGoal], None]
+    ) -> None:
         self.on_goal = on_goal
         self.on_cancel = on_cancel
 

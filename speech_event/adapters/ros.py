@@ -77,7 +77,7 @@ def _from_ros(ours: type, message: object) -> Any:
     return ours(**{field.name: getattr(message, field.name) for field in dataclasses.fields(ours)})
 
 
-def _as_ros(ros_type: Any, message: object) -> Any:
+def _as_ros(ros_type: Any, message: Any) -> Any:
     return ros_type(**dataclasses.asdict(message))
 
 
@@ -99,7 +99,9 @@ class RosActionGoal:
         self._handle.set_accepted()
 
     def feedback(self, feedback: object) -> None:
-        self._handle.publish_feedback(_as_ros(generated_class(self._action.name + "Feedback", "msg"), feedback))
+        self._handle.publish_feedback(
+            _as_ros(generated_class(self._action.name + "Feedback", "msg"), feedback)
+        )
 
     def succeed(self, result: object) -> None:
         self._handle.set_succeeded(self._result(result))
@@ -194,7 +196,11 @@ class RosTransport:
                 on_cancel(goal)
 
         server = actionlib.ActionServer(
-            name, generated_class(action.name + "Action", "msg"), goal_arrived, cancel_arrived, auto_start=False
+            name,
+            generated_class(action.name + "Action", "msg"),
+            goal_arrived,
+            cancel_arrived,
+            auto_start=False,
         )
         server.start()
         self._action_servers[name] = server

@@ -46,7 +46,9 @@ def _action_messages(action: Path, out: Path) -> List[Path]:
     if not GENACTION.is_file():
         raise InterfaceError(f"{GENACTION} not found: apt-get install libactionlib-msgs-dev")
     before = set(out.glob("*.msg"))
-    subprocess.run([sys.executable, str(GENACTION), str(action), "-o", str(out)], check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, str(GENACTION), str(action), "-o", str(out)], check=True, capture_output=True
+    )
     return sorted(set(out.glob("*.msg")) - before)
 
 

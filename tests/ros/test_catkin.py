@@ -1,9 +1,12 @@
 """catkin_make installs the package in a robot workspace."""
 
+import re
 import shutil
 import subprocess
 from pathlib import Path
 
+from speech_event.msg import RecogniseSpeechAction
+from speech_event.srv import SetEnabled, SetLanguage
 from tests.ros.conftest import ROOT
 
 
@@ -29,3 +32,12 @@ def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tm
     library = install / "lib" / "python3" / "dist-packages"
     assert (library / "speech_event" / "node.py").is_file()
     assert (library / "speech_event" / "adapters" / "ros.py").is_file()
+    # catkin built the robot interfaces from srv/ and action/: the same definitions (MD5) as the
+    # project's own build step, which the ROS tests use.
+    for module, built in (
+        ("srv/_SetEnabled.py", SetEnabled),
+        ("srv/_SetLanguage.py", SetLanguage),
+        ("msg/_RecogniseSpeechAction.py", RecogniseSpeechAction),
+    ):
+        text = (library / "speech_event" / module).read_text()
+        assert re.search(f"_md5sum = [\"']{built._md5sum}[\"']", text), module

@@ -41,6 +41,14 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
             ] in subscribers
 
         wait_for(node_is_up, "/speechEvent to subscribe and advertise", timeout=60)
+        # What the Behaviour Controller and the action clients look for
+        for service in ("/speechEvent/set_enabled", "/speechEvent/set_language"):
+            wait_for(lambda service=service: _serves(master, service), service)
+        publishers, subscribers, _ = master.getSystemState()
+        action = "/speechEvent/recognise_speech_action"
+        assert [f"{action}/result", ["/speechEvent"]] in publishers
+        assert [f"{action}/goal", ["/speechEvent"]] in subscribers
+        assert ["/diagnostics", ["/speechEvent"]] in publishers
         started = descendants(launch.pid)  # the master, rosout and the node
         assert len(started) >= 3
         os.killpg(launch.pid, signal.SIGINT)
@@ -48,6 +56,13 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
         wait_for(lambda: not any(Path(f"/proc/{pid}").exists() for pid in started), "all of it to stop", 30)
     finally:
         processes.stop_all()
+
+
+def _serves(master: rosgraph.Master, service: str) -> bool:
+    try:
+        return bool(master.lookupService(service))
+    except Exception:
+        return False
 
 
 def _test_harness_launch(tmp_path: Path, scenario: Path) -> str:

@@ -1,0 +1,165 @@
+"""The robot's own clients against our node on a real roscore.
+
+The robot's Behaviour Controller and action clients use their own types (``speechEventSetStatus``,
+``speechEventSetLanguage`` and an action of their package): other names, the same fields. ROS 1
+matches them by the MD5 of the definitions, so the node must serve them. The tests build those
+types with the same build step under another package name and talk to the node through them only.
+"""
+
+import importlib
+import subprocess
+import sys
+from types import ModuleType
+from typing import Dict, Iterator, List, Tuple
+
+import actionlib
+import pytest
+import rosgraph
+import rospy
+from actionlib_msgs.msg import GoalStatus
+from diagnostic_msgs.msg import DiagnosticArray
+from std_msgs import msg as std_msgs
+
+from fixtures.audio import speak_tones
+from harness.ros_runner import Processes
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.adapters.ros_interfaces import generate
+from tests.application import APPLICATION
+from tests.ros.conftest import wait_for
+
+ROBOT_PACKAGE = "cssr_system"
+ACTION = "/speechEvent/recognise_speech_action"
+
+
+@pytest.fixture(scope="module")
+def robot_types(tmp_path_factory: pytest.TempPathFactory) -> Tuple[ModuleType, ModuleType]:
+    """The robot's definitions, exactly as reference.md gives them, built as package cssr_system."""
+    definitions = tmp_path_factory.mktemp("robot_definitions")
+    (definitions / "srv").mkdir()
+    (definitions / "action").mkdir()
+    (definitions / "srv" / "speechEventSetStatus.srv").write_text("string status\n---\nint8 response\n")
+    (definitions / "srv" / "speechEventSetLanguage.srv").write_text("string language\n---\nint8 response\n")
+    (definitions / "action" / "recogniseSpeech.action").write_text(
+        "float32 wait\n---\nstring transcription\n---\nint8 progress\n"
+    )
+    built = tmp_path_factory.mktemp("robot_python")
+    (built / ROBOT_PACKAGE).mkdir()
+    (built / ROBOT_PACKAGE / "__init__.py").write_text("")
+    generate(ROBOT_PACKAGE, definitions, built / ROBOT_PACKAGE)
+    sys.path.insert(0, str(built))
+    return importlib.import_module(f"{ROBOT_PACKAGE}.srv"), importlib.import_module(f"{ROBOT_PACKAGE}.msg")
+
+
+@pytest.fixture(scope="module")
+def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Our node (the fake recognizer serves both languages), checking soundDetection every second."""
+    work = tmp_path_factory.mktemp("node")
+    config = work / "speech_event.ini"
+    config.write_text("health_check_period 1\nspeech_pause_period 0.5\n")
+    processes = Processes(roscore, work)
+    processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
+    try:
+        wait_for(lambda: _has_service("/speechEvent/set_enabled"), "the node's services", 60)
+        yield
+    finally:
+        processes.stop_all()
+
+
+def _has_service(name: str) -> bool:
+    try:
+        rosgraph.Master("/probe").lookupService(name)
+        return True
+    except Exception:
+        return False
+
+
+def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: None) -> None:
+    master = rosgraph.Master("/behaviourControllerProbe")
+    assert master.lookupService("/speechEvent/set_language").startswith("rosrpc://")
+    publishers, _, _ = master.getSystemState()
+    assert [TEXT_TOPIC, ["/speechEvent"]] in publishers
+
+
+@pytest.mark.parametrize(
+    ("service", "request_text", "response"),
+    [
+        ("set_language", "English", 1),
+        ("set_language", "Kinyarwanda", 1),
+        ("set_language", " english ", 1),
+        ("set_language", "French", 0),
+        ("set_enabled", "true", 1),
+        ("set_enabled", "FALSE", 1),
+        ("set_enabled", "maybe", 0),
+        ("set_enabled", "true", 1),
+    ],
+)
+def test_the_robots_service_types_are_served(
+    node: None, robot_types: Tuple[ModuleType, ModuleType], service: str, request_text: str, response: int
+) -> None:
+    srv, _ = robot_types
+    kind = srv.speechEventSetLanguage if service == "set_language" else srv.speechEventSetStatus
+    call = rospy.ServiceProxy(f"/speechEvent/{service}", kind)
+    assert call(request_text).response == response
+
+
+def _action_client(robot_types: Tuple[ModuleType, ModuleType]) -> actionlib.SimpleActionClient:
+    _, msg = robot_types
+    client = actionlib.SimpleActionClient(ACTION, msg.recogniseSpeechAction)
+    assert client.wait_for_server(rospy.Duration(30))
+    return client
+
+
+def test_the_robots_action_client_is_aborted_while_sound_detection_is_down(
+    node: None, robot_types: Tuple[ModuleType, ModuleType]
+) -> None:
+    _, msg = robot_types
+    client = _action_client(robot_types)
+    client.send_goal(msg.recogniseSpeechGoal(wait=2.0))
+    assert client.wait_for_result(rospy.Duration(30))
+    assert client.get_state() == GoalStatus.ABORTED
+    assert client.get_result().transcription == "Error: soundDetection is down"
+
+
+def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100(
+    node: None, robot_types: Tuple[ModuleType, ModuleType]
+) -> None:
+    _, msg = robot_types
+    sound_detection = rospy.Publisher(SIGNAL_TOPIC, std_msgs.Float32MultiArray, queue_size=100)
+    try:
+        wait_for(lambda: sound_detection.get_num_connections() > 0, "the node to connect")
+        client = _action_client(robot_types)
+        client.send_goal(msg.recogniseSpeechGoal(wait=0.3))  # no speech: succeeds with ""
+        assert client.wait_for_result(rospy.Duration(30))
+        assert (client.get_state(), client.get_result().transcription) == (GoalStatus.SUCCEEDED, "")
+        progress: List[int] = []
+        client.send_goal(msg.recogniseSpeechGoal(wait=5.0), feedback_cb=lambda f: progress.append(f.progress))
+        wait_for(lambda: client.get_state() == GoalStatus.ACTIVE, "the goal to be accepted")
+        speech = speak_tones("yego", 48000)
+        for start in range(0, speech.size, 4096):
+            sound_detection.publish(std_msgs.Float32MultiArray(data=speech[start : start + 4096].tolist()))
+            rospy.sleep(4096 / 48000)
+        assert client.wait_for_result(rospy.Duration(30))
+        assert (client.get_state(), client.get_result().transcription) == (GoalStatus.SUCCEEDED, "yego")
+        wait_for(lambda: progress and progress[-1] == 100, "the last feedback")
+        assert progress[0] == 0 and progress == sorted(progress)
+    finally:
+        sound_detection.unregister()
+
+
+def test_diagnostics_reach_rostopic_as_a_diagnostic_array(node: None, roscore: Dict[str, str]) -> None:
+    array = rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=30)
+    (status,) = array.status
+    values = {value.key: value.value for value in status.values}
+    assert status.name == "speechEvent"
+    assert values["engine"] == "ToneRecognizer"
+    assert values["soundDetection"] in ("no publisher registered", "publisher connected")
+    assert status.level == (2 if values["soundDetection"] == "no publisher registered" else 0)
+    # and rostopic, as a user runs it, reads it
+    echo = subprocess.run(
+        ["rostopic", "echo", "-n", "1", "/diagnostics/status[0]/name"],
+        env=roscore,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert echo.stdout.splitlines()[0] == '"speechEvent"', echo.stderr
