@@ -137,6 +137,8 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
             f"over {utterances} utterances, fake recognizer (target <= 20 ms)"
         )
 
+        service_round_trips()
+
         before = _received(node_uri)
         quiet = noise(BLOCK * burst, -40.0, np.random.default_rng(1)).reshape(burst, BLOCK)
         start = time.perf_counter()
@@ -153,6 +155,27 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
     finally:
         rospy.signal_shutdown("bench done")
         processes.stop_all()
+
+
+def service_round_trips(calls: int = 200) -> None:
+    """set_enabled and set_language (the engine already built) as the Behaviour Controller calls them."""
+    from speech_event.srv import SetEnabled, SetLanguage
+
+    for name, kind, requests in (
+        ("set_enabled", SetEnabled, ("false", "true")),
+        ("set_language", SetLanguage, ("Kinyarwanda", "English")),
+    ):
+        rospy.wait_for_service(f"/speechEvent/{name}", timeout=30)
+        call = rospy.ServiceProxy(f"/speechEvent/{name}", kind, persistent=False)
+        times: List[float] = []
+        for number in range(calls):
+            start = time.perf_counter()
+            assert call(requests[number % 2]).response == 1
+            times.append(time.perf_counter() - start)
+        print(
+            f"roscore: {name} round trip {statistics.median(times) * 1e3:.2f} ms median, "
+            f"{max(times) * 1e3:.2f} ms max ({calls} calls, a new connection each, as rosservice)"
+        )
 
 
 def _more_than(texts: List[str], count: int) -> Callable[[], bool]:
