@@ -81,43 +81,48 @@ def switch_with_build(name: str, directory: Path, runs: int = 5) -> None:
     )
 
 
+def _worker_latencies(directory: Path, speech: np.ndarray, utterances: int, builds: int) -> List[float]:
+    """Closed-to-published times of back-to-back utterances; with ``builds``, another thread switches
+    language once (building the Kinyarwanda engine) and builds builds - 1 more engines meanwhile."""
+    executor = ThreadExecutor()
+    clock, bus, node = _node(
+        NemoTransducerRecognizer(directory),
+        lambda language: NemoTransducerRecognizer(directory),
+        lambda _: executor,
+    )
+    closed: List[float] = []
+    published: List[float] = []
+    bus.subscribe(TEXT_TOPIC, String, lambda message: published.append(time.perf_counter()))
+
+    def switch() -> None:
+        bus.call(SET_LANGUAGE_SERVICE, SetLanguageRequest("Kinyarwanda"))
+        for _ in range(builds - 1):
+            NemoTransducerRecognizer(directory)
+
+    switcher = threading.Thread(target=switch)
+    if builds:
+        switcher.start()
+    for _ in range(utterances):
+        node.on_signal(Float32MultiArray(data=speech))
+        clock.advance(CONFIG.speech_pause_period + 0.01)
+        closed.append(time.perf_counter())
+        while len(published) < len(closed):
+            time.sleep(0.0005)
+    if builds:
+        switcher.join()
+    executor.shutdown(10)
+    return [done - start for start, done in zip(closed, published)]
+
+
 def held_up(directory: Path, utterances: int = 30, builds: int = 6) -> None:
     """Latency of the recognition worker, alone and while set_language builds engines meanwhile."""
     speech = speak_tones("go to the kitchen and bring me the red cup", 16000)
-    for label, switching in (("alone", False), ("during set_language builds", True)):
-        executor = ThreadExecutor()
-        clock, bus, node = _node(
-            NemoTransducerRecognizer(directory),
-            lambda language: NemoTransducerRecognizer(directory),
-            lambda _: executor,
-        )
-        closed: List[float] = []
-        published: List[float] = []
-        bus.subscribe(TEXT_TOPIC, String, lambda message: published.append(time.perf_counter()))
-
-        def switch() -> None:
-            # One real switch (it builds the Kinyarwanda engine on this thread), then more builds
-            # of the same kind, as further first-time switches would do.
-            bus.call(SET_LANGUAGE_SERVICE, SetLanguageRequest("Kinyarwanda"))
-            for _ in range(builds - 1):
-                NemoTransducerRecognizer(directory)
-
-        switcher = threading.Thread(target=switch)
-        if switching:
-            switcher.start()
-        for _ in range(utterances):
-            node.on_signal(Float32MultiArray(data=speech))
-            clock.advance(CONFIG.speech_pause_period + 0.01)
-            closed.append(time.perf_counter())
-            while len(published) < len(closed):
-                time.sleep(0.0005)
-        if switching:
-            switcher.join()
-        executor.shutdown(10)
-        latency = [done - start for start, done in zip(closed, published)]
+    for label, count in (("alone", 0), (f"during {builds} engine builds", builds)):
+        latency = _worker_latencies(directory, speech, utterances, count)
         print(
             f"recognition worker {label}: closed to published {statistics.median(latency) * 1e3:.1f} ms "
-            f"median, {max(latency) * 1e3:.1f} ms max ({utterances} utterances of {speech.size / 16000:.1f} s)"
+            f"median, {max(latency) * 1e3:.1f} ms max "
+            f"({utterances} utterances of {speech.size / 16000:.1f} s)"
         )
 
 
