@@ -12,9 +12,11 @@ else:
             packages=[
                 "speech_event",
                 "speech_event.adapters",
+                "speech_event.asr",
                 "speech_event.recognizers",
                 "harness",
                 "fixtures",
-            ]
+            ],
+            package_data={"harness": ["data/*.txt"]},
         )
     )

@@ -17,7 +17,8 @@ from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_sce
 from speech_event.asr.errors import ModelError
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
 
-COMMANDS = Path(__file__).resolve().parents[1] / "config" / "robot_commands.txt"
+# The robot's command phrases: package data, so the demo runs from any folder after pip install.
+COMMANDS = Path(__file__).resolve().parent / "data" / "robot_commands.txt"
 USAGE_ERROR = 2
 INTERRUPTED = 130
 TERMINATED = 143
@@ -46,15 +47,27 @@ def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scena
     return replay.play
 
 
+SIM_TIME_HINT = (
+    "sim-time replay drives /clock: the node under test must follow /use_sim_time (rospy's clock "
+    "does); a node timed by the wall clock needs --real-time"
+)
+
+
 def _run(arguments: argparse.Namespace) -> int:
+    if arguments.transport == "memory" and (arguments.real_time or arguments.node_command):
+        raise ScenarioError(
+            "--real-time and --node-command need --transport ros: in memory the node under test is ours, "
+            "on a fake clock"
+        )
     base = _base_config(arguments.config)
     scenarios = [load_scenario(path, base) for path in arguments.files]
+    hint = SIM_TIME_HINT if arguments.transport == "ros" and not arguments.real_time else None
     failures = 0
     with ExitStack() as stack:
         play = _replays(arguments, stack)
         for scenario in scenarios:
             outcome = play(scenario)
-            print(report(scenario, outcome), flush=True)
+            print(report(scenario, outcome, hint), flush=True)
             failures += not passed(scenario, outcome)
     print(f"{len(scenarios) - failures} passed, {failures} failed")
     return 1 if failures else 0
@@ -104,7 +117,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     )
     run.add_argument(
         "--node-command",
-        help="ros: run the scenarios against this command instead of our node ({config} = its config file)",
+        help="ros: run the scenarios against this command instead of our node ({config}: the path of a "
+        "configuration file with the scenario's settings; {recognizer}: the engine the scenario names)",
     )
     run.add_argument("-c", "--config", help="configuration file the scenarios' [config] overrides")
     run.set_defaults(handler=_run)

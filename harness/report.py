@@ -31,7 +31,8 @@ def _timed(title: str, messages: Sequence[Published]) -> List[str]:
     ]
 
 
-def report(scenario: Scenario, outcome: Outcome) -> str:
+def report(scenario: Scenario, outcome: Outcome, hint: Optional[str] = None) -> str:
+    """The PASS line, or the FAIL line with diffs, times, and ``hint`` (what may explain it)."""
     if passed(scenario, outcome):
         return f"PASS  {scenario.name}  ({scenario.source}, {len(outcome.published)} messages)"
     lines: List[str] = [f"FAIL  {scenario.name}  ({scenario.source})"]
@@ -51,4 +52,6 @@ def report(scenario: Scenario, outcome: Outcome) -> str:
     lines.extend(_timed("published", outcome.published))
     if outcome.results:
         lines.extend(_timed("action results", outcome.results))
+    if hint:
+        lines.append(f"      note: {hint}")
     return "\n".join(lines)

@@ -9,6 +9,7 @@ wall clock instead. Every process it starts is stopped again, also on failure or
 
 import contextlib
 import dataclasses
+import math
 import os
 import shlex
 import signal
@@ -60,6 +61,10 @@ EVENT_TIMEOUT = 20.0
 # recognition runs and its text is published: the runner waits this long for that text.
 TIMER_SETTLE = 0.03
 TEXT_WAIT = 1.0
+# Our node sets this to the ROS time it started (its health checks count from there).
+START_TIME_PARAM = "/speechEvent/start_time"
+# Real time: how long the harness needs, after the node is ready, before the scenario's t = 0.
+ALIGN_MARGIN = 0.5
 SERVICES: Dict[str, ServiceType] = {SET_ENABLED_SERVICE: SET_ENABLED, SET_LANGUAGE_SERVICE: SET_LANGUAGE}
 # actionlib's terminal states, as a scenario's results name them.
 GOAL_STATES = {
@@ -113,18 +118,32 @@ class Processes:
 
     def start(self, name: str, command: Sequence[str], talk: bool = False) -> "subprocess.Popen[str]":
         # The child holds its own copy of the log's descriptor; ours closes once it has started.
-        with open(self._log_dir / f"{name}.log", "a") as log:
-            process = subprocess.Popen(
-                list(command),
-                env=self._environment,
-                stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
-                stdout=subprocess.PIPE if talk else log,
-                stderr=log,
-                text=True,
-                start_new_session=True,
-            )
+        with open(self.log(name), "a") as log:
+            try:
+                process = subprocess.Popen(
+                    list(command),
+                    env=self._environment,
+                    stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
+                    stdout=subprocess.PIPE if talk else log,
+                    stderr=log,
+                    text=True,
+                    start_new_session=True,
+                )
+            except OSError as problem:  # no such executable, not executable
+                raise ReplayError(f"cannot start the {name} ({command[0]}): {problem.strerror}") from None
         self._started.append(process)
         return process
+
+    def log(self, name: str) -> Path:
+        return self._log_dir / f"{name}.log"
+
+    def last_lines(self, name: str, count: int = 15) -> str:
+        """The end of a process's log, for an error that must say why it died."""
+        try:
+            lines = self.log(name).read_text(errors="replace").splitlines()
+        except OSError:
+            return "(no output)"
+        return "\n".join(lines[-count:]) or "(no output)"
 
     def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
         if process.poll() is not None:
@@ -184,6 +203,7 @@ class RosReplay:
         self._clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
         self._outcome = Outcome()
         self._now = 0.0
+        self._wall_start = time.monotonic()
         self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
         action = generated_class(RECOGNISE_SPEECH.name + "Action", "msg")
         self._action_client = actionlib.ActionClient(ACTION_NAME, action)
@@ -197,8 +217,12 @@ class RosReplay:
         except Exception:
             return False
 
+    def _scenario_time(self) -> float:
+        """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
+        return time.monotonic() - self._wall_start if self._options.real_time else self._now
+
     def _on_text(self, message: String) -> None:
-        self._outcome.published.append(Published(self._now, message.data))
+        self._outcome.published.append(Published(self._scenario_time(), message.data))
 
     # -- the services and the action ------------------------------------------------------------
 
@@ -221,7 +245,9 @@ class RosReplay:
                 state = GOAL_STATES.get(handle.get_goal_status(), "unknown")
                 result = handle.get_result()
                 transcription = result.transcription if result is not None else ""
-                self._outcome.results.append(Published(self._now, result_text(state, transcription)))
+                self._outcome.results.append(
+                    Published(self._scenario_time(), result_text(state, transcription))
+                )
 
         handle = self._action_client.send_goal(goal_type(**dataclasses.asdict(event.goal)), transition)
         self._goals.append(handle)
@@ -248,10 +274,10 @@ class RosReplay:
 
     # -- the clock --------------------------------------------------------------------------------
 
-    def _set_clock(self, when: float, wall_start: float) -> None:
+    def _set_clock(self, when: float) -> None:
         self._now = when
         if self._options.real_time:
-            time.sleep(max(0.0, wall_start + when - time.monotonic()))
+            time.sleep(max(0.0, self._wall_start + when - time.monotonic()))
         else:
             self._clock.publish(Clock(clock=rospy.Time.from_sec(when)))
             time.sleep(TIMER_SETTLE)
@@ -263,7 +289,9 @@ class RosReplay:
         config_path = self._work / "speech_event_configuration.ini"
         config_path.write_text(format_config(config))
         if self._options.node_command:
-            command = shlex.split(self._options.node_command.format(config=config_path))
+            # Split first, then fill in: a path with spaces stays one word, other braces stay as written.
+            fill = {"{config}": str(config_path), "{recognizer}": engine}
+            command = [_filled(word, fill) for word in shlex.split(self._options.node_command)]
         else:
             command = [
                 sys.executable,
@@ -274,6 +302,29 @@ class RosReplay:
                 engine,
             ]
         return self.processes.start("node", command)
+
+    def _wait_for_node(self, node: "subprocess.Popen[str]") -> None:
+        deadline = time.monotonic() + STARTUP_TIMEOUT
+        while not self._node_ready():
+            status = node.poll()
+            if status is not None:
+                raise ReplayError(
+                    f"the node under test exited with status {status} before it subscribed to "
+                    f"{SIGNAL_TOPIC}; its last output:\n{self.processes.last_lines('node')}"
+                )
+            if time.monotonic() > deadline:
+                raise ReplayError(f"gave up after {STARTUP_TIMEOUT:.0f} s waiting for the node to subscribe")
+            time.sleep(0.01)
+
+    def _align_with_the_node(self, period: float) -> None:
+        """Real time: start the scenario clock at one of the node's health-check instants, so its
+        checks fall at multiples of the period on the scenario clock, as in sim time. Our node says
+        when it started (its checks count from there); for another, when it became ready will do."""
+        started = float(rospy.get_param(START_TIME_PARAM, time.time()))
+        checks_passed = math.ceil((time.time() + ALIGN_MARGIN - started) / period)
+        start = started + checks_passed * period
+        self._wall_start = time.monotonic() + (start - time.time())
+        time.sleep(max(0.0, self._wall_start - time.monotonic()))
 
     def _node_uri(self) -> str:
         _, subscribers, _ = self._master.getSystemState()
@@ -309,9 +360,11 @@ class RosReplay:
         expected = run_in_memory(scenario)
         self._outcome = Outcome()
         self._goals = []
-        self._set_clock(0.0, time.monotonic())
+        self._set_clock(0.0)
+        with contextlib.suppress(KeyError):
+            rospy.delete_param(START_TIME_PARAM)  # the last scenario's node said it
         node = self._start_node(scenario)
-        _wait_until(self._node_ready, "the node to subscribe and advertise", STARTUP_TIMEOUT)
+        self._wait_for_node(node)
         sends_goals = any(isinstance(event, SendGoal) for event in timeline.events)
         if sends_goals and not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
             raise ReplayError(f"the node serves no action {ACTION_NAME}")
@@ -321,10 +374,11 @@ class RosReplay:
         for index, event in enumerate(timeline.events):
             events_at[event.time].append((index, event))
         visits = _times_to_visit(scenario, timeline, closing_times, expected)
-        wall_start = time.monotonic()
+        if self._options.real_time:
+            self._align_with_the_node(scenario.config.health_check_period)
         played = 0
         for when in visits:
-            self._set_clock(when, wall_start)
+            self._set_clock(when)
             for index, event in events_at.get(when, []):
                 self._catch_up(expected, played)
                 if isinstance(event, CallService):
@@ -335,9 +389,11 @@ class RosReplay:
                     stand_in.play(index, event, self._live_connections)
                 played = index + 1
             self._catch_up(expected, played)
+        # What was observed by the end of the timeline, before anything is torn down: a health
+        # check between stopping soundDetection and stopping the node is no part of the scenario.
+        outcome, self._outcome = self._outcome, Outcome()
         stand_in.stop()
         self.processes.stop(node)
-        outcome, self._outcome = self._outcome, Outcome()
         return outcome
 
 
@@ -398,6 +454,12 @@ class _StandIn:
 
     def stop(self) -> None:
         self._processes.stop(self._process)
+
+
+def _filled(word: str, values: Dict[str, str]) -> str:
+    for placeholder, value in values.items():
+        word = word.replace(placeholder, value)
+    return word
 
 
 def _utterance_closing_times(scenario: Scenario, timeline: Timeline) -> Set[float]:

@@ -8,7 +8,6 @@ running recognition 2 s to finish.
 import argparse
 import logging
 import sys
-from pathlib import Path
 from typing import List, Optional
 
 from speech_event.asr.errors import ModelError
@@ -18,13 +17,31 @@ from speech_event.recognizers import RECOGNIZERS, engine_builder
 from speech_event.speech_screen import SpeechScreen, speech_screen_for
 
 NODE_NAME = "speechEvent"
+# What ``run`` imports from ROS 1: a missing one means no ROS here, not a bug.
+ROS_MODULES = {
+    "rospy",
+    "rosgraph",
+    "rospkg",
+    "actionlib",
+    "actionlib_msgs",
+    "diagnostic_msgs",
+    "std_msgs",
+    "genpy",
+}
 SHUTDOWN_GRACE_SECONDS = 2.0
-DEFAULT_CONFIG = Path(__file__).resolve().parents[1] / "config" / "speech_event_configuration.ini"
+ROS_NEEDED = (
+    "error: the node needs ROS 1 (rospy, actionlib, diagnostic_msgs), which this Python cannot import "
+    "({problem}); see README.md, 'On ROS and on the robot'"
+)
 
 
 def _arguments(argv: List[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog="speech-event", description="The Speech Event ROS node.")
-    parser.add_argument("-c", "--config", default=str(DEFAULT_CONFIG), help="configuration file")
+    parser.add_argument(
+        "-c",
+        "--config",
+        help="configuration file (default: the embedded defaults, config/speech_event_configuration.ini)",
+    )
     parser.add_argument(
         "--recognizer",
         choices=sorted(RECOGNIZERS),
@@ -54,7 +71,13 @@ def build_screen(config: SpeechEventConfig) -> SpeechScreen:
 def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: SpeechScreen) -> None:
     # Only the ROS entry point needs the ROS adapters (and so rospy).
     from speech_event.adapters.executors import ThreadExecutor
-    from speech_event.adapters.ros import RosClock, RosTransport, start_ros_node, wait_for_shutdown
+    from speech_event.adapters.ros import (
+        RosClock,
+        RosTransport,
+        announce_start,
+        start_ros_node,
+        wait_for_shutdown,
+    )
     from speech_event.node import SpeechEventNode
 
     start_ros_node(NODE_NAME, verbose=config.verbose_mode)
@@ -63,6 +86,7 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
         config, RosTransport(), RosClock(), recognizer, executor, engine_builder(name, config), screen
     )
     node.start()
+    announce_start(node.started_at)
     wait_for_shutdown()
     node.stop()
     logger = logging.getLogger("speech_event")
@@ -83,11 +107,17 @@ def main(argv: Optional[List[str]] = None) -> int:
         return export_main(raw[1:])
     arguments = _arguments(raw)
     try:
-        config = load_config(arguments.config)
+        config = load_config(arguments.config) if arguments.config else SpeechEventConfig()
         recognizer = build_recognizer(config, arguments.recognizer)
         screen = build_screen(config)
     except ConfigError as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
-    run(config, recognizer, arguments.recognizer, screen)
+    try:
+        run(config, recognizer, arguments.recognizer, screen)
+    except ImportError as problem:  # no ROS 1 here: one line, not rospy's traceback
+        if problem.name is None or problem.name.split(".")[0] not in ROS_MODULES:
+            raise
+        print(ROS_NEEDED.format(problem=problem), file=sys.stderr)
+        return 2
     return 0

@@ -8,7 +8,7 @@ configuration file loads unchanged.
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping, Union
+from typing import Mapping, Optional, Union
 
 from speech_event.keyvalue import ConfigError, KeyRule, KeyValueFormat, boolean, choice, number, seconds, text
 
@@ -53,9 +53,39 @@ class SpeechEventConfig:
     # Silero VAD: an utterance whose highest speech probability stays below this is not
     # transcribed; 0 turns the check off.
     vad_threshold: float = 0.0
+    # Seconds of speech that may wait for recognition; past it the oldest utterance is dropped.
+    max_backlog: float = 120.0
+    # A recognition running longer is logged, and cancelled where the engine allows; 0: never.
+    recognition_timeout: float = 30.0
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
+# soundDetection's block: 4096 samples (85 ms at 48 kHz); blocks of one utterance come this far apart.
+SOUND_DETECTION_BLOCK = 4096
+
+
+def _together(config: SpeechEventConfig) -> Optional[str]:
+    """What is wrong with values that are each allowed but do not work together."""
+    block = SOUND_DETECTION_BLOCK / config.sample_rate
+    one_block = (
+        f"one {SOUND_DETECTION_BLOCK}-sample block at sample_rate {config.sample_rate} Hz ({block:.3f} s)"
+    )
+    if config.max_message_length < block:
+        return (
+            f"max_message_length {config.max_message_length} s is shorter than {one_block}: "
+            "every block would be rejected"
+        )
+    if config.speech_pause_period <= block:
+        return (
+            f"speech_pause_period {config.speech_pause_period} s is not longer than {one_block}: "
+            "speech would be cut between blocks"
+        )
+    if config.min_utterance_length > config.max_utterance_length:
+        return (
+            f"min_utterance_length {config.min_utterance_length} s is longer than max_utterance_length "
+            f"{config.max_utterance_length} s: no utterance would ever be transcribed"
+        )
+    return None
 
 
 # Keys that name files; a scenario's relative paths are taken from the scenario's folder.
@@ -78,7 +108,8 @@ _FORMAT = KeyValueFormat(
         "audio_storage_dir": KeyRule(text, "a directory path, or nothing to store no audio"),
         "cuda": KeyRule(boolean, "true or false"),
         "sample_rate": KeyRule(number(int, 8000, 192000), "an integer number of Hz from 8000 to 192000"),
-        "speech_pause_period": seconds(0.05, 60.0),
+        # Below 0.2 s the gaps inside speech end utterances: words come out cut into letters.
+        "speech_pause_period": seconds(0.2, 60.0),
         "max_utterance_length": seconds(1.0, 300.0),
         "health_check_period": seconds(0.1, 3600.0),
         "publish_unrecognized": KeyRule(boolean, "true or false"),
@@ -92,6 +123,8 @@ _FORMAT = KeyValueFormat(
         "model": KeyRule(choice(*MODEL_FAMILIES), " or ".join(MODEL_FAMILIES)),
         "min_utterance_length": seconds(0.0, 300.0),
         "vad_threshold": KeyRule(number(float, 0.0, 1.0), "a speech probability from 0 to 1; 0: no check"),
+        "max_backlog": seconds(1.0, 3600.0),
+        "recognition_timeout": seconds(0.0, 3600.0),
     },
     # The robot's v1.1 spellings.
     aliases={
@@ -99,6 +132,7 @@ _FORMAT = KeyValueFormat(
         "maxUtteranceLen": "max_utterance_length",
         "minUtteranceLen": "min_utterance_length",
     },
+    check=_together,
 )
 
 

@@ -17,6 +17,7 @@ DIAGNOSTICS_TOPIC = "/diagnostics"
 STATUS_NAME = "speechEvent"
 # Why an utterance was not transcribed: the node was disabled, and the speech screen's reasons.
 DISCARDED_WHILE_DISABLED = "disabled"
+DISCARDED_BACKLOG = "backlog"  # dropped unrecognized to keep within max_backlog
 
 
 @dataclass
@@ -40,6 +41,8 @@ class NodeState:
     enabled: bool
     sound_detection: PublisherStatus
     rejected: Dict[str, int]
+    clipped: int = 0
+    timed_out: int = 0  # recognitions that ran past recognition_timeout
 
 
 class NodeStatistics:
@@ -95,16 +98,18 @@ class NodeStatistics:
             ]
             values += [
                 KeyValue(f"utterances discarded: {reason}", str(counts.discarded.get(reason, 0)))
-                for reason in [DISCARDED_WHILE_DISABLED, *discard_reasons]
+                for reason in [DISCARDED_WHILE_DISABLED, *discard_reasons, DISCARDED_BACKLOG]
             ]
             values.append(KeyValue("messages ignored while disabled", str(counts.ignored_while_disabled)))
             values += [
                 KeyValue(f"rejected messages: {reason}", str(n)) for reason, n in state.rejected.items()
             ]
+            values.append(KeyValue("clipped messages", str(state.clipped)))
             values += _timing(counts.recognition_seconds, counts.audio_seconds)
             values += [
                 KeyValue("utterances waiting for recognition", str(counts.waiting)),
                 KeyValue("queued audio (s)", f"{counts.waiting_audio_seconds:.3f}"),
+                KeyValue("recognitions timed out", str(state.timed_out)),
             ]
             backlog = counts.waiting - 1
         level, message = _level(state, backlog)

@@ -12,6 +12,9 @@ import re
 from pathlib import Path
 from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Optional, Type, TypeVar, Union
 
+# No configuration is anywhere near this; reading more would only fill memory (/dev/zero).
+MAX_FILE_BYTES = 2**20
+
 
 class ConfigError(Exception):
     """A configuration that cannot be used; the message says where and what is allowed."""
@@ -92,11 +95,14 @@ class KeyValueFormat(Generic[Config]):
         config_type: Type[Config],
         rules: Dict[str, KeyRule],
         aliases: Optional[Mapping[str, str]] = None,
+        check: Optional[Callable[[Config], Optional[str]]] = None,
     ) -> None:
+        """``check`` says what is wrong with values that are each allowed but not together."""
         fields = {field.name for field in dataclasses.fields(config_type)}  # type: ignore[arg-type]
         assert set(rules) == fields, "every field needs a rule, and every rule a field"
         self._type = config_type
         self._rules = rules
+        self._check = check
         # Every spelling a file may use, mapped to the field it sets.
         self._spellings: Dict[str, str] = {}
         for key in rules:
@@ -127,7 +133,7 @@ class KeyValueFormat(Generic[Config]):
             if spelling not in self._spellings:
                 raise self._unknown_key(source, spelling)
             values[self._spellings[spelling]] = self._value(self._spellings[spelling], raw, source)
-        return dataclasses.replace(base, **values)  # type: ignore[type-var]
+        return self._checked(dataclasses.replace(base, **values), source)  # type: ignore[type-var]
 
     def parse(self, content: str, source: str) -> Config:
         """Parse the text of a file; keys it does not set keep their defaults."""
@@ -152,13 +158,27 @@ class KeyValueFormat(Generic[Config]):
                 )
             first_line[key] = line_number
             values[key] = self._value(key, raw, where)
-        return self._type(**values)
+        return self._checked(self._type(**values), source)
+
+    def _checked(self, config: Config, source: str) -> Config:
+        problem = self._check(config) if self._check is not None else None
+        if problem:
+            raise ConfigError(f"{source}: {problem}")
+        return config
 
     def load(self, path: Union[str, Path]) -> Config:
         try:
-            content = Path(path).read_text(encoding="utf-8")
+            with open(path, "rb") as file:  # read at most one byte past the limit: /dev/zero ends
+                raw = file.read(MAX_FILE_BYTES + 1)
         except OSError as problem:
             raise ConfigError(f"{path}: cannot read the configuration file: {problem.strerror}") from None
+        if len(raw) > MAX_FILE_BYTES:
+            raise ConfigError(
+                f"{path}: the configuration file is over {MAX_FILE_BYTES // 2**20} MB; a configuration is "
+                "a few lines of 'key value'"
+            )
+        try:
+            content = raw.decode("utf-8-sig")  # a byte-order mark (Windows editors) is fine
         except UnicodeDecodeError:
             raise ConfigError(f"{path}: the configuration file is not UTF-8 text") from None
         return self.parse(content, str(path))

@@ -10,6 +10,7 @@ speech_screen, transcript_text), and so do the robot's interfaces around them: t
 (control), the recognise_speech action (listen_action) and /diagnostics (diagnostics).
 """
 
+import functools
 import logging
 import threading
 import time
@@ -23,6 +24,7 @@ from speech_event.config import SpeechEventConfig
 from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE, RuntimeControl
 from speech_event.diagnostics import (
     DIAGNOSTICS_TOPIC,
+    DISCARDED_BACKLOG,
     DISCARDED_WHILE_DISABLED,
     NodeState,
     NodeStatistics,
@@ -50,11 +52,12 @@ from speech_event.ports import (
     Transcript,
     Transport,
 )
+from speech_event.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.rejections import RejectionLog
 from speech_event.resample import resample
 from speech_event.speech_screen import Discard, SpeechScreen, speech_screen_for
 from speech_event.storage import UtteranceStore
-from speech_event.transcript_text import text_to_publish
+from speech_event.transcript_text import checked_transcript, text_to_publish
 from speech_event.validate import Rejection, validate_signal
 
 _LOG = logging.getLogger("speech_event")
@@ -91,6 +94,9 @@ class SpeechEventNode:
             UtteranceStore(config.audio_storage_dir, config.sample_rate) if config.audio_storage_dir else None
         )
         self._statistics = NodeStatistics()
+        self._queue = RecognitionQueue(config.max_backlog)
+        self._running: Optional[RecognitionJob] = None  # the utterance being recognized
+        self._timed_out = 0
         self._action = ListenAction(clock, self._refusal)
         self._control = RuntimeControl(
             LanguageEngines(config.language, recognizer, build_engine),
@@ -113,6 +119,7 @@ class SpeechEventNode:
         self._text_publisher: Optional[Publisher] = None
         self._diagnostics_publisher: Optional[Publisher] = None
         self._periodic: List[Periodic] = []
+        self._started_at = 0.0
 
     @property
     def rejection_counts(self) -> Dict[str, int]:
@@ -124,6 +131,11 @@ class SpeechEventNode:
         """Samples of the utterance being collected, not yet handed to recognition."""
         with self._lock:
             return self._assembler.pending_samples
+
+    @property
+    def started_at(self) -> float:
+        """When start() ran, on the node's clock: health checks come every period from here."""
+        return self._started_at
 
     @property
     def language(self) -> str:
@@ -144,9 +156,14 @@ class SpeechEventNode:
         self._transport.serve_action(
             ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel
         )
-        self._periodic.append(Periodic(self._clock, self._config.health_check_period, self._check_health))
+        self._started_at = self._clock.now()
+        self._periodic.append(
+            Periodic(self._clock, self._config.health_check_period, self._check_health, self._started_at)
+        )
         if self._config.verbose_mode and self._config.heartbeat_msg_period > 0:
-            self._periodic.append(Periodic(self._clock, self._config.heartbeat_msg_period, self._heartbeat))
+            self._periodic.append(
+                Periodic(self._clock, self._config.heartbeat_msg_period, self._heartbeat, self._started_at)
+            )
         _LOG.info("speechEvent started: %s", self._config)
 
     def stop(self) -> None:
@@ -161,15 +178,24 @@ class SpeechEventNode:
     # -- message in -> validate -> assemble ---------------------------------------------------------
 
     def on_signal(self, message: object) -> None:
-        """The subscriber callback: cheap, never blocks on recognition."""
-        samples = validate_signal(message, self._max_samples)
+        """The subscriber callback: cheap, never blocks on recognition, never raises."""
+        try:
+            self._take(message)
+        except Exception:  # validation names every bad message; this is the last line of defence
+            _LOG.exception("unexpected failure handling a message on %s; the node goes on", SIGNAL_TOPIC)
+
+    def _take(self, message: object) -> None:
+        signal = validate_signal(message, self._max_samples)
         with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
             if not self._enabled:  # the robot is speaking: its own voice is not to be transcribed
                 self._statistics.ignored_while_disabled()
                 return
-            if isinstance(samples, Rejection):
-                self._rejections.record(samples)
+            if isinstance(signal, Rejection):
+                self._rejections.record(signal)
                 return
+            if signal.clipped:
+                self._rejections.record_clipped(signal.clipped)
+            samples = signal.samples
             self._last_arrival = self._clock.now()
             if self._assembler.pending_samples == 0:
                 self._collecting_since = self._last_arrival
@@ -203,28 +229,73 @@ class SpeechEventNode:
         started_at = self._collecting_since if self._collecting_since is not None else closed_at
         if not more_follows:
             self._collecting_since = None
-        self._statistics.queued(audio.size / self._config.sample_rate)
+        seconds = audio.size / self._config.sample_rate
+        self._statistics.queued(seconds)
         self._action.utterance_closed(number, started_at, more_follows)
-        self._executor.submit(lambda: self._recognize_and_publish(number, closed_at, audio, recognizer))
+        for dropped in self._queue.put(RecognitionJob(number, closed_at, audio, recognizer, seconds)):
+            self._statistics.finished(dropped.seconds)
+            self._statistics.discarded(DISCARDED_BACKLOG)
+            self._action.utterance_done(dropped.number, None)
+        self._executor.submit(self._run_next)
 
     # -- resample -> screen -> recognize -> publish (on the executor) -------------------------------
 
-    def _recognize_and_publish(
-        self, number: int, closed_at: float, audio: np.ndarray, recognizer: Recognizer
-    ) -> None:
-        seconds = audio.size / self._config.sample_rate
+    def _run_next(self) -> None:
+        """One executor job: the oldest waiting utterance (none when it was dropped), watched."""
+        job = self._queue.take()
+        if job is None:
+            return
+        watchdog: Optional[Timer] = None
+        with self._lock:
+            self._running = job
+            if self._config.recognition_timeout > 0:
+                watchdog = self._clock.call_at(
+                    self._clock.now() + self._config.recognition_timeout,
+                    functools.partial(self._overdue, job),
+                )
+        try:
+            self._recognize_and_publish(job)
+        finally:
+            with self._lock:
+                self._running = None
+                if watchdog is not None:
+                    watchdog.cancel()
+
+    def _overdue(self, job: RecognitionJob) -> None:
+        with self._lock:  # under the lock, so a cancel never reaches the next utterance's run
+            if self._running is not job:
+                return
+            self._timed_out += 1
+            cancel: Optional[Callable[[], None]] = getattr(job.recognizer, "cancel", None)
+            _LOG.error(
+                "recognition of utterance %d (%.2f s) still runs after recognition_timeout %.0f s: %s",
+                job.number,
+                job.seconds,
+                self._config.recognition_timeout,
+                "cancelling it"
+                if cancel
+                else "this engine cannot be cancelled; later utterances wait, bounded by max_backlog",
+            )
+            if cancel is not None:
+                cancel()
+
+    def _recognize_and_publish(self, job: RecognitionJob) -> None:
+        number, recognizer, seconds = job.number, job.recognizer, job.seconds
         discard: Optional[Discard] = None
         text: Optional[str] = None
         try:
             if self._store is not None:
-                self._store.save(number, closed_at, audio)
-            speech = resample(audio, self._config.sample_rate, recognizer.sample_rate)
+                self._store.save(number, job.closed_at, job.audio)
+            speech = resample(job.audio, self._config.sample_rate, recognizer.sample_rate)
             discard = self._screen.discard(speech, recognizer.sample_rate)
             if discard is None:
                 began = self._stopwatch()
-                transcript = recognizer.transcribe(speech)
+                result = recognizer.transcribe(speech)
                 self._statistics.transcribed(seconds, self._stopwatch() - began)
-        except Exception:  # a failed recognition must not stop the node
+                transcript = checked_transcript(result, number)
+        # A failed recognition, or an engine that answers with something else than a transcript,
+        # must not stop the node; SystemExit from an engine is a failure like any other.
+        except (Exception, SystemExit):
             _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
             transcript = Transcript("")
         finally:
@@ -295,6 +366,8 @@ class SpeechEventNode:
                 enabled=self._enabled,
                 sound_detection=self._sound_detection,
                 rejected={reason.value: count for reason, count in self._rejections.counts.items()},
+                clipped=self._rejections.clipped,
+                timed_out=self._timed_out,
             )
         return self._statistics.status(state, [reason.value for reason in Discard])
 
@@ -303,8 +376,15 @@ class SpeechEventNode:
             self._text_publisher.publish(String(text))
 
     def _heartbeat(self) -> None:
+        with self._lock:
+            clipped, timed_out = self._rejections.clipped, self._timed_out
         _LOG.info(
-            "speechEvent running: %d utterances so far, rejected messages %s",
+            "speechEvent running: %d utterances so far, rejected messages %s, clipped messages %d, "
+            "%.1f s of speech waiting for recognition, %d dropped (max_backlog), %d timed out",
             self._utterances,
             {reason: count for reason, count in self.rejection_counts.items() if count},
+            clipped,
+            self._queue.seconds,
+            self._queue.dropped,
+            timed_out,
         )

@@ -2,6 +2,8 @@
 model errors, and the whole engine against onnx-asr on models built at test time."""
 
 import logging
+import threading
+import time
 from pathlib import Path
 from typing import List, Tuple
 
@@ -167,3 +169,28 @@ def test_cuda_without_a_cuda_onnxruntime_warns_and_runs_on_the_cpu(
     assert caplog.messages == [
         "cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU"
     ]
+
+
+def test_cancel_stops_a_running_transcription_and_the_next_one_runs(random_model: Path) -> None:
+    engine = NemoTransducerRecognizer(random_model)
+    long_audio = noise(16000 * 120, -20.0, np.random.default_rng(5))
+    failures: List[BaseException] = []
+
+    def transcribe() -> None:
+        try:
+            engine.transcribe(long_audio)
+        except Exception as problem:  # onnxruntime's own exception type
+            failures.append(problem)
+
+    worker = threading.Thread(target=transcribe)
+    worker.start()
+    while engine._run is None:  # the transcription has begun
+        time.sleep(0.001)
+    engine.cancel()
+    worker.join(30)
+    assert len(failures) == 1
+    assert "terminate" in str(failures[0]).lower()
+    speech = resample(speak_tones("muraho", 48000), 48000, 16000)
+    after = engine.transcribe(speech).text  # the cancel was for that run only
+    assert after != ""
+    assert after == NemoTransducerRecognizer(random_model).transcribe(speech).text

@@ -43,6 +43,7 @@ def test_the_status_counts_what_the_node_did_and_times_recognition() -> None:
         "utterances discarded: disabled": "1",
         "utterances discarded: too_short": "1",
         "utterances discarded: below_vad_threshold": "0",
+        "utterances discarded: backlog": "0",
         "messages ignored while disabled": "1",
         "rejected messages: empty": "1",
         "rejected messages: nan_or_inf": "0",
@@ -50,12 +51,15 @@ def test_the_status_counts_what_the_node_did_and_times_recognition() -> None:
         "rejected messages: multi_dimensional": "0",
         "rejected messages: oversized": "0",
         "rejected messages: wrong_type": "0",
+        "rejected messages: malformed": "0",
+        "clipped messages": "0",
         "last recognition time (s)": "0.2500",
         "mean recognition time (s)": "0.2500",
         "last real-time factor": "0.5000",
         "mean real-time factor": "0.5000",
         "utterances waiting for recognition": "0",
         "queued audio (s)": "0.000",
+        "recognitions timed out": "0",
     }
 
 

@@ -141,10 +141,14 @@ def test_verbose_mode_logs_a_heartbeat(caplog: pytest.LogCaptureFixture) -> None
         rig.sound_detection.publish(Float32MultiArray(data=[]))
         rig.clock.advance_to(4.5)
     heartbeats = [r.getMessage() for r in caplog.records if "running" in r.getMessage()]
-    assert heartbeats == [
-        "speechEvent running: 0 utterances so far, rejected messages {'empty': 1}",
-        "speechEvent running: 0 utterances so far, rejected messages {'empty': 1}",
-    ]
+    assert (
+        heartbeats
+        == [
+            "speechEvent running: 0 utterances so far, rejected messages {'empty': 1}, clipped messages 0, "
+            "0.0 s of speech waiting for recognition, 0 dropped (max_backlog), 0 timed out",
+        ]
+        * 2
+    )
 
 
 def test_resampling_removes_what_is_above_the_new_nyquist_and_keeps_speech_band() -> None:

@@ -15,7 +15,7 @@ from speech_event.recognizers.sphinx import SphinxRecognizer, phrases_to_jsgf
 from tests.application import run_application
 
 ROOT = Path(__file__).resolve().parents[1]
-COMMANDS = ROOT / "config" / "robot_commands.txt"
+COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
 
 
 def test_phrases_compile_to_a_jsgf_grammar_of_exactly_those_sentences() -> None:

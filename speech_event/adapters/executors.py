@@ -58,5 +58,5 @@ class ThreadExecutor:
                 return
             try:
                 job()
-            except Exception:  # the worker must outlive a failing job
-                _LOG.exception("a recognition job failed")
+            except BaseException:  # the worker must outlive any failing job, SystemExit included
+                _LOG.exception("a recognition job failed; the recognition worker goes on")

@@ -1,6 +1,11 @@
-"""A clock that moves only when told to: timers fire in time order, ties in the order they were set."""
+"""A clock that moves only when told to: timers fire in time order, ties in the order they were set.
+
+Timers may be set from any thread (a recognition worker sets its watchdog); they fire on the
+thread that moves the clock.
+"""
 
 import heapq
+import threading
 from typing import Callable, List, Tuple
 
 
@@ -18,23 +23,28 @@ class FakeClock:
         self._now = start
         self._sequence = 0
         self._queue: List[Tuple[float, int, FakeTimer]] = []
+        self._lock = threading.Lock()  # held for the queue, never while a callback runs
 
     def now(self) -> float:
         return self._now
 
     def call_at(self, when: float, callback: Callable[[], None]) -> FakeTimer:
         timer = FakeTimer(callback)
-        heapq.heappush(self._queue, (max(when, self._now), self._sequence, timer))
-        self._sequence += 1
+        with self._lock:
+            heapq.heappush(self._queue, (max(when, self._now), self._sequence, timer))
+            self._sequence += 1
         return timer
 
     def advance_to(self, when: float) -> None:
         """Move to ``when``, firing every timer due by then, also those set while firing."""
         if when < self._now:
             raise ValueError(f"the clock cannot go back from {self._now} to {when}")
-        while self._queue and self._queue[0][0] <= when:
-            due, _, timer = heapq.heappop(self._queue)
-            self._now = due
+        while True:
+            with self._lock:
+                if not self._queue or self._queue[0][0] > when:
+                    break
+                due, _, timer = heapq.heappop(self._queue)
+                self._now = due
             if not timer.cancelled:
                 timer.callback()
         self._now = when

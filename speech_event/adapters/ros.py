@@ -12,6 +12,7 @@ dataclasses of speech_event.messages, field by field.
 import dataclasses
 import importlib
 import logging
+import queue
 import threading
 from typing import Any, Callable, Dict
 
@@ -183,18 +184,33 @@ class RosTransport:
         on_goal: Callable[[ActionGoal], None],
         on_cancel: Callable[[ActionGoal], None],
     ) -> None:
+        # actionlib calls back holding its server lock, which a goal handle's __del__ also takes
+        # (whenever the garbage collector runs it, on any thread, maybe one holding the node's
+        # lock). So the node's code never runs under that lock: the callbacks only hand the goal
+        # to a thread of this action's own, in arrival order.
+        calls: queue.Queue[Callable[[], None]] = queue.Queue()  # novermin
+
         def goal_arrived(handle: Any) -> None:
             goal = RosActionGoal(handle, action, self._forget_goal)
             with self._goals_lock:
                 self._goals[goal.goal_id] = goal
-            on_goal(goal)
+            calls.put(lambda: on_goal(goal))
 
         def cancel_arrived(handle: Any) -> None:
             with self._goals_lock:
                 goal = self._goals.get(str(handle.get_goal_id().id))
             if goal is not None:
-                on_cancel(goal)
+                calls.put(lambda: on_cancel(goal))
 
+        def serve() -> None:
+            while True:
+                call = calls.get()
+                try:
+                    call()
+                except Exception:  # one bad goal must not end the action
+                    _LOG.exception("%s: handling a goal failed", name)
+
+        threading.Thread(target=serve, name="speech_event_action", daemon=True).start()
         server = actionlib.ActionServer(
             name,
             generated_class(action.name + "Action", "msg"),
@@ -280,6 +296,12 @@ def start_ros_node(name: str, verbose: bool) -> None:
     logger.addHandler(RosLogHandler())
     logger.setLevel(logging.INFO if verbose else logging.WARNING)
     logger.propagate = False  # rosout prints them already
+
+
+def announce_start(started_at: float) -> None:
+    """Say when the node started (~start_time): a real-time replay lines its scenario clock up with
+    the node's health checks, which count from there."""
+    rospy.set_param("~start_time", started_at)
 
 
 def wait_for_shutdown() -> None:

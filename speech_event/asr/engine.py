@@ -1,9 +1,15 @@
-"""The NeMo conformer-transducer recognizer: features -> encoder -> greedy RNN-T -> vocabulary."""
+"""The NeMo conformer-transducer recognizer: features -> encoder -> greedy RNN-T -> vocabulary.
 
+``cancel`` stops a running ``transcribe`` from another thread (onnxruntime's RunOptions.terminate):
+the node's recognition_timeout uses it, so a hung recognition does not hold up the next one.
+"""
+
+import functools
 from pathlib import Path
-from typing import List, Union
+from typing import List, Optional, Union
 
 import numpy as np
+import onnxruntime
 
 from speech_event.asr.errors import ModelError
 from speech_event.asr.features import features
@@ -30,23 +36,32 @@ class NemoTransducerRecognizer:
         self._manifest = load_manifest(directory / MANIFEST_FILE)
         self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
         self._model = TransducerModel(directory, cuda)
+        self._run: Optional[onnxruntime.RunOptions] = None  # the options of the transcribe running now
 
     @property
     def sample_rate(self) -> int:
         return self._manifest.features.sample_rate
 
-    def token_ids(self, audio: np.ndarray) -> List[int]:
+    def token_ids(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> List[int]:
         """The greedy token ids for 16 kHz ``audio``, before the vocabulary turns them to text."""
         inputs = features(audio, self._manifest.features)
         if inputs.shape[1] == 0:
             return []
         return greedy_decode(
-            self._model.encode(inputs),
-            self._model.step,
+            self._model.encode(inputs, run),
+            functools.partial(self._model.step, run=run),
             self._model.initial_state(),
             self._vocabulary.blank,
             self._manifest.max_symbols_per_step,
         )
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
-        return Transcript(self._vocabulary.text(self.token_ids(audio)))
+        run = onnxruntime.RunOptions()
+        self._run = run
+        return Transcript(self._vocabulary.text(self.token_ids(audio, run)))
+
+    def cancel(self) -> None:
+        """Stop the transcribe running now: its next onnxruntime call raises."""
+        run = self._run
+        if run is not None:
+            run.terminate = True

@@ -10,7 +10,7 @@ hidden]) -> ``outputs`` (logits, last dimension V + 1), ``prednet_lengths``, ``o
 
 import logging
 from pathlib import Path
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import onnxruntime
@@ -93,14 +93,15 @@ class TransducerModel:
         states = {arg.name: arg.shape for arg in self._decoder_joint.get_inputs()}
         self._state_shapes = [states["input_states_1"], states["input_states_2"]]
 
-    def encode(self, features: np.ndarray) -> np.ndarray:
-        """[features, T] -> encoder frames [T', D]."""
+    def encode(self, features: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> np.ndarray:
+        """[features, T] -> encoder frames [T', D]. ``run.terminate`` stops it (it raises)."""
         outputs, lengths = self._encoder.run(
             ["outputs", "encoded_lengths"],
             {
                 "audio_signal": features[None].astype(np.float32),
                 "length": np.array([features.shape[1]], np.int64),
             },
+            run,
         )
         return np.asarray(outputs[0, :, : int(lengths[0])].T)
 
@@ -108,7 +109,13 @@ class TransducerModel:
         h, c = (np.zeros((int(shape[0]), 1, int(shape[2])), dtype=np.float32) for shape in self._state_shapes)
         return h, c
 
-    def step(self, frame: np.ndarray, last_token: int, state: LstmState) -> Tuple[np.ndarray, LstmState]:
+    def step(
+        self,
+        frame: np.ndarray,
+        last_token: int,
+        state: LstmState,
+        run: Optional[onnxruntime.RunOptions] = None,
+    ) -> Tuple[np.ndarray, LstmState]:
         logits, h, c = self._decoder_joint.run(
             ["outputs", "output_states_1", "output_states_2"],
             {
@@ -118,5 +125,6 @@ class TransducerModel:
                 "input_states_1": state[0],
                 "input_states_2": state[1],
             },
+            run,
         )
         return np.asarray(logits).reshape(-1), (h, c)

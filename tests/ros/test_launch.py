@@ -44,11 +44,17 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
         # What the Behaviour Controller and the action clients look for
         for service in ("/speechEvent/set_enabled", "/speechEvent/set_language"):
             wait_for(lambda service=service: _serves(master, service), service)
-        publishers, subscribers, _ = master.getSystemState()
         action = "/speechEvent/recognise_speech_action"
-        assert [f"{action}/result", ["/speechEvent"]] in publishers
-        assert [f"{action}/goal", ["/speechEvent"]] in subscribers
-        assert ["/diagnostics", ["/speechEvent"]] in publishers
+
+        def action_and_diagnostics_are_up() -> bool:
+            publishers, subscribers, _ = master.getSystemState()
+            return (
+                [f"{action}/result", ["/speechEvent"]] in publishers
+                and [f"{action}/goal", ["/speechEvent"]] in subscribers
+                and ["/diagnostics", ["/speechEvent"]] in publishers
+            )
+
+        wait_for(action_and_diagnostics_are_up, "the action's topics and /diagnostics")
         started = descendants(launch.pid)  # the master, rosout and the node
         assert len(started) >= 3
         os.killpg(launch.pid, signal.SIGINT)
