@@ -65,6 +65,9 @@ TEXT_WAIT = 1.0
 START_TIME_PARAM = "/speechEvent/start_time"
 # Real time: how long the harness needs, after the node is ready, before the scenario's t = 0.
 ALIGN_MARGIN = 0.5
+# Real time: the node's checks come this much before the scenario's multiples of the period. In
+# sim time (and in memory) a check due at T runs before the events at T; so here too.
+CHECK_LEAD = 0.05
 SERVICES: Dict[str, ServiceType] = {SET_ENABLED_SERVICE: SET_ENABLED, SET_LANGUAGE_SERVICE: SET_LANGUAGE}
 # actionlib's terminal states, as a scenario's results name them.
 GOAL_STATES = {
@@ -257,9 +260,11 @@ class RosReplay:
             "the node to accept the action goal",
         )
 
-    def _catch_up(self, expected: Outcome, played: int) -> None:
-        """Wait (a while) for what the node published in memory by now, before the next event."""
-        if self._options.real_time:
+    def _catch_up(self, expected: Outcome, played: int, at_the_end: bool = False) -> None:
+        """Wait (a while) for what the node published in memory by now, before the next event.
+
+        In real time waiting would shift the events after it, so it waits only at the end."""
+        if self._options.real_time and not at_the_end:
             return
 
         def due(items: List[Published]) -> int:
@@ -322,9 +327,10 @@ class RosReplay:
         when it started (its checks count from there); for another, when it became ready will do."""
         started = float(rospy.get_param(START_TIME_PARAM, time.time()))
         checks_passed = math.ceil((time.time() + ALIGN_MARGIN - started) / period)
-        start = started + checks_passed * period
+        start = started + checks_passed * period + CHECK_LEAD
         self._wall_start = time.monotonic() + (start - time.time())
         time.sleep(max(0.0, self._wall_start - time.monotonic()))
+        self._outcome = Outcome()  # what the node said before the scenario's t = 0 is no part of it
 
     def _node_uri(self) -> str:
         _, subscribers, _ = self._master.getSystemState()
@@ -388,7 +394,7 @@ class RosReplay:
                 else:
                     stand_in.play(index, event, self._live_connections)
                 played = index + 1
-            self._catch_up(expected, played)
+            self._catch_up(expected, played, at_the_end=when == visits[-1])
         # What was observed by the end of the timeline, before anything is torn down: a health
         # check between stopping soundDetection and stopping the node is no part of the scenario.
         outcome, self._outcome = self._outcome, Outcome()
@@ -398,7 +404,13 @@ class RosReplay:
 
 
 class _StandIn:
-    """The soundDetection process of a replay: started, told to publish, shut down or killed."""
+    """The soundDetection processes of a replay: started, told to publish, shut down or killed.
+
+    While soundDetection is down the next incarnation is already started, as a ROS node that is no
+    publisher yet (under a name of its own, so a crashed one's stale registration stays for the
+    node to find), and only advertises when the outage ends: a restart takes no scenario time,
+    also in real time.
+    """
 
     def __init__(
         self, processes: Processes, scenario_path: str, base_config: Optional[str], node_uri: str
@@ -408,11 +420,20 @@ class _StandIn:
         if base_config:
             self._command += ["-c", base_config]
         self._node_uri = node_uri
-        self._process = self._start()
+        self._incarnations = 0
+        self._process = self._up(self._launch())
+        self._next: Optional[subprocess.Popen[str]] = None
         self._sent = 0  # messages this incarnation has published
 
-    def _start(self) -> "subprocess.Popen[str]":
-        process = self._processes.start("sound_detection", self._command, talk=True)
+    def _launch(self) -> "subprocess.Popen[str]":
+        name = "soundDetection" if self._incarnations == 0 else f"soundDetection{self._incarnations}"
+        self._incarnations += 1
+        process = self._processes.start("sound_detection", [*self._command, "--name", name], talk=True)
+        self._expect(process, "started")
+        return process
+
+    def _up(self, process: "subprocess.Popen[str]") -> "subprocess.Popen[str]":
+        self._tell(process, "advertise")
         self._expect(process, "ready")
         return process
 
@@ -422,14 +443,15 @@ class _StandIn:
         if line != expected:
             raise ReplayError(f"the soundDetection stand-in said {line!r}, expected {expected!r}")
 
-    def _tell(self, command: str) -> None:
-        assert self._process.stdin is not None
-        self._process.stdin.write(command + "\n")
-        self._process.stdin.flush()
+    @staticmethod
+    def _tell(process: "subprocess.Popen[str]", command: str) -> None:
+        assert process.stdin is not None
+        process.stdin.write(command + "\n")
+        process.stdin.flush()
 
     def play(self, index: int, event: Event, live_connections: Callable[[str], List[Any]]) -> None:
         if isinstance(event, Publish) and message_type_name(event.message) == Float32MultiArray._type:
-            self._tell(f"publish {index}")
+            self._tell(self._process, f"publish {index}")
             self._expect(self._process, f"published {index}")
             self._sent += 1
             sent = self._sent
@@ -445,15 +467,19 @@ class _StandIn:
             if event.kind == "crash":
                 os.killpg(self._process.pid, signal.SIGKILL)
             else:
-                self._tell("shutdown")
+                self._tell(self._process, "shutdown")
             self._process.wait(EVENT_TIMEOUT)
             _wait_until(lambda: not live_connections(self._node_uri), "the node to lose soundDetection")
+            self._next = self._launch()
         elif isinstance(event, ComeUp):
-            self._process = self._start()
+            self._process = self._up(self._next or self._launch())
+            self._next = None
             self._sent = 0
 
     def stop(self) -> None:
-        self._processes.stop(self._process)
+        for process in (self._process, self._next):
+            if process is not None:
+                self._processes.stop(process)
 
 
 def _filled(word: str, values: Dict[str, str]) -> str:

@@ -1,10 +1,13 @@
 """The soundDetection stand-in for replay on a real roscore (its own process).
 
 It builds the scenario's timeline itself (the same, seeded, as the harness's). Stepped by the
-harness, it publishes events when told, one line each on stdin/stdout: it prints ``ready`` once the
-node is connected; ``publish I`` publishes event I and prints ``published I``; ``shutdown``
-unregisters cleanly and exits. The harness kills it with SIGKILL for a crash. With ``--wrong-type I``
-it is instead another node that publishes event I (a message of another type) on the topic once.
+harness, it publishes events when told, one line each on stdin/stdout: it prints ``started`` once
+it is a ROS node, not yet a publisher (so the harness can start the next incarnation during an
+outage, and bring it up at once when the outage ends); ``advertise`` makes it a publisher, and it
+prints ``ready`` once the node is connected; ``publish I`` publishes event I and prints
+``published I``; ``shutdown`` unregisters cleanly and exits. The harness kills it with SIGKILL for
+a crash. With ``--wrong-type I`` it is instead another node that publishes event I (a message of
+another type) on the topic once.
 
 With ``--autonomous`` (the test-harness launch file) it plays the whole timeline by itself, driving
 /clock, once the checker listens, then says so on /speechEventReplay/done. A crash cannot be played
@@ -109,6 +112,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     add_scenario_arguments(parser)
     parser.add_argument("--wrong-type", type=int, metavar="I", help="publish event I as another node")
     parser.add_argument("--autonomous", action="store_true", help="play the timeline alone on ROS time")
+    parser.add_argument("--name", default="soundDetection", help="the ROS node name of this incarnation")
     arguments = parser.parse_args(without_remappings(argv))
     timeline = build_timeline(scenario_from_arguments(arguments))
     events: List[object] = list(timeline.events)
@@ -124,7 +128,11 @@ def main(argv: Optional[List[str]] = None) -> int:
             "does not check; replay it with python -m harness run --transport ros"
         )
         return 2
-    rospy.init_node("soundDetection", disable_signals=not arguments.autonomous)
+    rospy.init_node(arguments.name, disable_signals=not arguments.autonomous)
+    if not arguments.autonomous:
+        _say("started")
+        if sys.stdin.readline().strip() != "advertise":
+            return 0  # the replay ended before this incarnation came up
     publisher = RosTransport().advertise(SIGNAL_TOPIC, Float32MultiArray)
     if not _connected(publisher):
         return 1

@@ -88,7 +88,9 @@ class SpeechEventNode:
         self._stopwatch = stopwatch
         self._screen = screen or speech_screen_for(config)
         self._max_samples = int(config.max_message_length * config.sample_rate)
-        self._assembler = UtteranceAssembler(config.sample_rate, config.max_utterance_length)
+        self._assembler = UtteranceAssembler(
+            config.sample_rate, config.max_utterance_length, self._screen.non_speech
+        )
         self._rejections = RejectionLog(clock.now, SIGNAL_TOPIC)
         self._store = (
             UtteranceStore(config.audio_storage_dir, config.sample_rate) if config.audio_storage_dir else None
@@ -131,6 +133,16 @@ class SpeechEventNode:
         """Samples of the utterance being collected, not yet handed to recognition."""
         with self._lock:
             return self._assembler.pending_samples
+
+    @property
+    def queued_speech_seconds(self) -> float:
+        """Seconds of speech waiting for recognition (bounded by max_backlog)."""
+        return self._queue.seconds
+
+    @property
+    def dropped_utterances(self) -> int:
+        """Utterances dropped unrecognized to keep within max_backlog."""
+        return self._queue.dropped
 
     @property
     def started_at(self) -> float:

@@ -10,6 +10,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from speech_event.assembly import NonSpeech
 from speech_event.config import SpeechEventConfig
 from speech_event.resample import resample
 from speech_event.vad import SAMPLE_RATE as VAD_RATE
@@ -27,12 +28,18 @@ SpeechProbability = Callable[[np.ndarray], float]
 
 class SpeechScreen:
     def __init__(
-        self, min_seconds: float, vad_threshold: float, speech_probability: Optional[SpeechProbability]
+        self,
+        min_seconds: float,
+        vad_threshold: float,
+        speech_probability: Optional[SpeechProbability],
+        non_speech: Optional[NonSpeech] = None,
     ) -> None:
         assert vad_threshold <= 0 or speech_probability is not None, "a VAD threshold needs a VAD"
         self._min_seconds = min_seconds
         self._vad_threshold = vad_threshold
         self._speech_probability = speech_probability
+        # Where the VAD hears no speech, for the length cut (speech_event/assembly.py); None: energy.
+        self.non_speech = non_speech
 
     def discard(self, audio: np.ndarray, sample_rate: int) -> Optional[Discard]:
         """Why ``audio`` is not transcribed, or None when it is speech to transcribe."""
@@ -47,5 +54,12 @@ class SpeechScreen:
 
 def speech_screen_for(config: SpeechEventConfig) -> SpeechScreen:
     """The screen the configuration asks for; ModelError when the VAD it needs is not installed."""
-    vad = SileroVad(silero_model_path()).max_speech_probability if config.vad_threshold > 0 else None
-    return SpeechScreen(config.min_utterance_length, config.vad_threshold, vad)
+    if config.vad_threshold <= 0:
+        return SpeechScreen(config.min_utterance_length, 0.0, None)
+    vad = SileroVad(silero_model_path())
+    return SpeechScreen(
+        config.min_utterance_length,
+        config.vad_threshold,
+        vad.max_speech_probability,
+        vad.non_speech(config.vad_threshold),
+    )

@@ -9,10 +9,12 @@ and the recurrent state carried from one window to the next.
 
 import importlib.util
 from pathlib import Path
+from typing import Callable, List
 
 import numpy as np
 
 from speech_event.asr.errors import ModelError
+from speech_event.resample import resample
 
 SAMPLE_RATE = 16000
 WINDOW = 512
@@ -49,17 +51,39 @@ class SileroVad:
         except Exception as problem:  # onnxruntime raises its own exception types
             raise ModelError(f"{path}: onnxruntime cannot load Silero VAD: {problem}") from None
 
-    def max_speech_probability(self, audio: np.ndarray) -> float:
-        """The highest speech probability over the windows of 16 kHz ``audio`` (0 if shorter than one)."""
+    def speech_probabilities(self, audio: np.ndarray) -> np.ndarray:
+        """The speech probability of each 512-sample window of 16 kHz ``audio``."""
         state = np.zeros(_STATE_SHAPE, dtype=np.float32)
         context = np.zeros(CONTEXT, dtype=np.float32)
         rate = np.array(SAMPLE_RATE, dtype=np.int64)
         samples = np.asarray(audio, dtype=np.float32)
-        highest = 0.0
+        probabilities: List[float] = []
         for start in range(0, samples.size - WINDOW + 1, WINDOW):
             window = samples[start : start + WINDOW]
             framed = np.concatenate([context, window])[None, :]
             probability, state = self._session.run(None, {"input": framed, "state": state, "sr": rate})
-            highest = max(highest, float(probability[0, 0]))
+            probabilities.append(float(probability[0, 0]))
             context = window[-CONTEXT:]
-        return highest
+        return np.array(probabilities)
+
+    def max_speech_probability(self, audio: np.ndarray) -> float:
+        """The highest speech probability over the windows of 16 kHz ``audio`` (0 if shorter than one)."""
+        probabilities = self.speech_probabilities(audio)
+        return float(probabilities.max()) if probabilities.size else 0.0
+
+    def non_speech(self, threshold: float) -> "Callable[[np.ndarray, int, int, int], np.ndarray]":
+        """For the length cut: audio at its rate, the first sample of the search and the hop there
+        -> for each hop from that sample on, True where the speech probability is below ``threshold``."""
+
+        def non_speech(audio: np.ndarray, rate: int, first: int, hop: int) -> np.ndarray:
+            region = resample(audio[first:], rate, SAMPLE_RATE)
+            probabilities = self.speech_probabilities(region)
+            hops = (audio.size - first) // hop
+            frames = np.minimum(
+                (np.arange(hops) * hop * SAMPLE_RATE / rate) // WINDOW, probabilities.size - 1
+            )
+            if probabilities.size == 0:
+                return np.zeros(hops, dtype=bool)
+            return np.asarray(probabilities[frames.astype(int)] < threshold)
+
+        return non_speech

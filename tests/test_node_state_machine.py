@@ -15,7 +15,7 @@ from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.assembly import SEARCH_SECONDS
+from speech_event.assembly import search_samples
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from speech_event.node import SpeechEventNode
@@ -31,7 +31,7 @@ CONFIG = SpeechEventConfig(
     health_check_period=3600.0,
 )
 LIMIT = int(CONFIG.max_utterance_length * CONFIG.sample_rate)
-SEARCH = min(int(SEARCH_SECONDS * CONFIG.sample_rate), LIMIT // 2)
+SEARCH = search_samples(LIMIT, CONFIG.sample_rate)
 
 
 class NodeMachine(RuleBasedStateMachine):

@@ -121,7 +121,7 @@ def test_the_queue_never_holds_more_than_max_backlog_and_the_oldest_are_dropped(
         for number in range(100):  # 100 utterances of 0.5 s, each 16 samples longer than the last
             rig.speak(np.full(8000 + 16 * number, 0.1, dtype=np.float32), block=8000 + 16 * number)
             rig.clock.advance(1.6)
-            queued.append(rig.node._queue.seconds)
+            queued.append(rig.node.queued_speech_seconds)
     assert max(queued) <= 10.0
     messages = [r.getMessage() for r in caplog.records]
     assert messages[0] == (

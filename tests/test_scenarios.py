@@ -1,7 +1,7 @@
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any, Dict
+from typing import Any, Dict, List
 
 import pytest
 
@@ -159,3 +159,21 @@ def test_the_demo_with_the_tones_voice_and_the_fake_recognizer() -> None:
         "speechEvent transcribes with fake",
         "/speechEvent/text at t=2.268 s: 'hello there'",  # 9 blocks, then the 1.5 s pause
     ]
+
+
+@pytest.mark.parametrize("option", [["--real-time"], ["--node-command", "other_node {config}"]])
+def test_ros_only_options_are_refused_in_memory(option: List[str]) -> None:
+    result = _harness("run", *option, "scenarios/single_utterance.toml")
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert result.stderr == (
+        "error: --real-time and --node-command need --transport ros: in memory the node under test is ours, "
+        "on a fake clock\n"
+    )
+
+
+def test_a_failure_report_carries_the_hint_it_is_given(tmp_path: Path) -> None:
+    scenario = parse_scenario({**MINIMAL, "expect": {"published": ["bye"]}}, "s.toml", SpeechEventConfig())
+    text = report(scenario, run_in_memory(scenario), "sim-time replay drives /clock")
+    assert text.splitlines()[-1] == "      note: sim-time replay drives /clock"
+    assert report(scenario, run_in_memory(scenario)).splitlines()[-1].startswith("        t=")

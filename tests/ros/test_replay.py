@@ -1,5 +1,6 @@
 """python -m harness run --transport ros: every scenario on a real roscore, as in memory."""
 
+import json
 import signal
 import subprocess
 import sys
@@ -71,9 +72,65 @@ def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) ->
     assert marker.read_text().endswith("speech_event_configuration.ini")
 
 
-def test_real_time_replay_passes_on_the_wall_clock(tmp_path: Path) -> None:
-    result = _harness(_own_roscore_environment(tmp_path), "--real-time", "scenarios/several_utterances.toml")
+def test_real_time_replay_passes_every_scenario_on_the_wall_clock(tmp_path: Path) -> None:
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--real-time",
+        *[str(path.relative_to(ROOT)) for path in SCENARIOS],
+    )
+    assert result.stdout.splitlines()[-1] == f"{len(SCENARIOS)} passed, 0 failed", (
+        result.stdout + result.stderr
+    )
+
+
+def test_the_node_command_is_split_before_its_placeholders_are_filled(tmp_path: Path) -> None:
+    arguments = tmp_path / "arguments.json"
+    wrapper = tmp_path / "other node.py"  # a space in the path: still one word
+    wrapper.write_text(
+        "import json, sys\n"
+        f"json.dump(sys.argv[1:], open({str(arguments)!r}, 'w'))\n"
+        "from speech_event.application import main\n"
+        "sys.exit(main(['-c', sys.argv[1], '--recognizer', sys.argv[3]]))\n"
+    )
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        f"{sys.executable} '{wrapper}' {{config}} '${{HOME}}' {{recognizer}}",
+        "scenarios/single_utterance.toml",
+    )
     assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+    config, home, recognizer = json.loads(arguments.read_text())
+    assert (config.endswith("speech_event_configuration.ini"), home, recognizer) == (True, "${HOME}", "fake")
+
+
+def test_a_node_command_that_exits_at_once_is_reported_at_once_with_its_output(tmp_path: Path) -> None:
+    started = time.monotonic()
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        f"{sys.executable} -c \"import sys; print('no model here', file=sys.stderr); sys.exit(3)\"",
+        "scenarios/single_utterance.toml",
+    )
+    assert time.monotonic() - started < 30  # not the 60 s start-up timeout
+    assert result.returncode == 1
+    assert result.stderr.splitlines()[-2:] == [
+        "error: the replay could not go on: the node under test exited with status 3 before it subscribed "
+        "to /soundDetection/signal; its last output:",
+        "no model here",
+    ]
+
+
+def test_a_node_command_that_does_not_exist_is_one_clear_error(tmp_path: Path) -> None:
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        "/no/such/node {config}",
+        "scenarios/single_utterance.toml",
+    )
+    assert result.returncode == 1
+    assert result.stderr == (
+        "error: the replay could not go on: cannot start the node (/no/such/node): No such file or directory\n"
+    )
 
 
 def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[str, str]) -> None:
