@@ -82,8 +82,10 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
 
     start_ros_node(NODE_NAME, verbose=config.verbose_mode)
     executor = ThreadExecutor()
+    # Every check ends within its period, whatever the network does to the master.
+    transport = RosTransport(master_timeout=min(1.0, config.health_check_period / 2))
     node = SpeechEventNode(
-        config, RosTransport(), RosClock(), recognizer, executor, engine_builder(name, config), screen
+        config, transport, RosClock(), recognizer, executor, engine_builder(name, config), screen
     )
     node.start()
     announce_start(node.started_at)

@@ -11,7 +11,7 @@ why, and the old language goes on.
 """
 
 import logging
-from typing import Callable
+from typing import Callable, Optional, Tuple
 
 from speech_event.asr.errors import ModelError
 from speech_event.engines import LanguageEngines
@@ -41,25 +41,15 @@ class RuntimeControl:
         self._use_engine = use_engine
 
     def on_set_enabled(self, request: object) -> SetEnabledResponse:
-        status = str(getattr(request, "status", "")).strip().lower()
-        if status not in ENABLED_VALUES:
-            _LOG.warning(
-                "%s: status %r is not allowed; allowed: true or false (any case)",
-                SET_ENABLED_SERVICE,
-                getattr(request, "status", None),
-            )
+        status = _allowed(request, "status", tuple(ENABLED_VALUES), SET_ENABLED_SERVICE)
+        if status is None:
             return SetEnabledResponse(REJECTED)
         self._set_enabled(ENABLED_VALUES[status])
         return SetEnabledResponse(ACCEPTED)
 
     def on_set_language(self, request: object) -> SetLanguageResponse:
-        language = str(getattr(request, "language", "")).strip().lower()
-        if language not in LANGUAGES:
-            _LOG.warning(
-                "%s: language %r is not allowed; allowed: english or kinyarwanda (any case)",
-                SET_LANGUAGE_SERVICE,
-                getattr(request, "language", None),
-            )
+        language = _allowed(request, "language", LANGUAGES, SET_LANGUAGE_SERVICE)
+        if language is None:
             return SetLanguageResponse(REJECTED)
         if language == self._current_language():
             return SetLanguageResponse(ACCEPTED)
@@ -84,3 +74,19 @@ class RuntimeControl:
             return SetLanguageResponse(REJECTED)
         self._use_engine(language, engine)
         return SetLanguageResponse(ACCEPTED)
+
+
+def _allowed(request: object, field: str, allowed: Tuple[str, ...], service: str) -> Optional[str]:
+    """The request's ``field``, trimmed and in lower case, if it is one of ``allowed``; else None,
+    with a warning that names what is allowed."""
+    value = str(getattr(request, field, "")).strip().lower()
+    if value in allowed:
+        return value
+    _LOG.warning(
+        "%s: %s %r is not allowed; allowed: %s (any case)",
+        service,
+        field,
+        getattr(request, field, None),
+        " or ".join(allowed),
+    )
+    return None

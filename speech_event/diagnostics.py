@@ -135,7 +135,7 @@ _TIMING_KEYS = (
 
 
 def _level(state: NodeState, backlog: int) -> Tuple[int, str]:
-    if state.sound_detection is not PublisherStatus.CONNECTED:
+    if not state.sound_detection.up:
         return DiagnosticStatus.ERROR, f"soundDetection is down: {state.sound_detection.value}"
     if backlog > 0:
         return DiagnosticStatus.WARN, f"recognition backlog: {backlog} utterances wait behind the running one"

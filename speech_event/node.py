@@ -354,7 +354,7 @@ class SpeechEventNode:
         """Why an action goal cannot listen now, or None."""
         if not self.enabled:
             return DISABLED
-        if self._transport.publisher_status(SIGNAL_TOPIC) is not PublisherStatus.CONNECTED:
+        if not self._transport.publisher_status(SIGNAL_TOPIC).up:
             return SOUND_DETECTION_DOWN
         return None
 
@@ -363,7 +363,7 @@ class SpeechEventNode:
     def _check_health(self) -> None:
         status = self._transport.publisher_status(SIGNAL_TOPIC)
         self._sound_detection = status
-        if status is not PublisherStatus.CONNECTED:
+        if not status.up:
             self._publish(SOUND_DETECTION_DOWN)  # published first: a log call may be slow (rosout)
             _LOG.warning("soundDetection is down on %s: %s", SIGNAL_TOPIC, status.value)
             self._action.sound_detection_down()

@@ -19,6 +19,13 @@ class PublisherStatus(enum.Enum):
     NONE = "no publisher registered"
     STALE = "publisher registered but no live connection"
     CONNECTED = "publisher connected"
+    # The ROS master did not answer in time: the subscriber's live connections alone tell.
+    CONNECTED_MASTER_SILENT = "publisher connected (the ROS master did not answer: from the live connection)"
+    NONE_MASTER_SILENT = "no live connection (the ROS master did not answer)"
+
+    @property
+    def up(self) -> bool:
+        return self in (PublisherStatus.CONNECTED, PublisherStatus.CONNECTED_MASTER_SILENT)
 
 
 class Publisher(Protocol):

@@ -160,19 +160,28 @@ class Hanging(SpyRecognizer):
         return Transcript("heard")
 
 
+def _hanging_rig(cancellable: bool) -> "tuple[Rig, Hanging, ThreadExecutor]":
+    """A node whose first recognition hangs (recognition_timeout 5 s), that recognition started."""
+    config = SpeechEventConfig(
+        sample_rate=16000,
+        health_check_period=3600.0,
+        publish_unrecognized=cancellable,
+        recognition_timeout=5.0,
+    )
+    recognizer = Hanging(cancellable)
+    executor = ThreadExecutor()
+    rig = Rig(config, recognizer, executor=executor)
+    rig.speak(HALF_SECOND)
+    rig.clock.advance(2.0)
+    assert recognizer.started.wait(10)
+    return rig, recognizer, executor
+
+
 def test_a_recognition_past_recognition_timeout_is_logged_cancelled_and_the_node_moves_on(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    config = SpeechEventConfig(
-        sample_rate=16000, health_check_period=3600.0, publish_unrecognized=True, recognition_timeout=5.0
-    )
-    recognizer = Hanging(cancellable=True)
-    executor = ThreadExecutor()
-    rig = Rig(config, recognizer, executor=executor)
     with caplog.at_level(logging.ERROR, logger="speech_event"):
-        rig.speak(HALF_SECOND)
-        rig.clock.advance(2.0)
-        assert recognizer.started.wait(10)
+        rig, _, executor = _hanging_rig(cancellable=True)
         rig.speak(HALF_SECOND)
         rig.clock.advance(5.0)  # the watchdog fires: 5 s after the recognition started
         assert executor.shutdown(timeout=10)
@@ -184,14 +193,8 @@ def test_a_recognition_past_recognition_timeout_is_logged_cancelled_and_the_node
 
 
 def test_an_engine_that_cannot_be_cancelled_is_named_as_such(caplog: pytest.LogCaptureFixture) -> None:
-    config = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0, recognition_timeout=5.0)
-    recognizer = Hanging(cancellable=False)
-    executor = ThreadExecutor()
-    rig = Rig(config, recognizer, executor=executor)
     with caplog.at_level(logging.ERROR, logger="speech_event"):
-        rig.speak(HALF_SECOND)
-        rig.clock.advance(2.0)
-        assert recognizer.started.wait(10)
+        rig, recognizer, executor = _hanging_rig(cancellable=False)
         rig.clock.advance(6.0)
         recognizer.release.set()
         assert executor.shutdown(timeout=10)

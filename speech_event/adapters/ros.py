@@ -10,10 +10,13 @@ dataclasses of speech_event.messages, field by field.
 """
 
 import dataclasses
+import http.client
 import importlib
 import logging
+import logging.handlers
 import queue
 import threading
+import xmlrpc.client
 from typing import Any, Callable, Dict
 
 import actionlib
@@ -134,8 +137,26 @@ class RosPublisher:
         return int(self._publisher.get_num_connections())
 
 
+class _TimeoutTransport(xmlrpc.client.Transport):
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self._timeout = timeout
+
+    def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        connection = super().make_connection(host)
+        connection.timeout = self._timeout
+        return connection
+
+
+# A master query takes far less than this on a working network; the node's checks use less.
+MASTER_TIMEOUT = 1.0
+
+
 class RosTransport:
-    def __init__(self) -> None:
+    def __init__(self, master_timeout: float = MASTER_TIMEOUT) -> None:
+        """``master_timeout``: the longest a question to the ROS master may take (keep it under the
+        health check period, so every check ends in time)."""
+        self._timeout = master_timeout
         self._subscribers: Dict[str, rospy.Subscriber] = {}
         self._services: Dict[str, rospy.Service] = {}
         self._action_servers: Dict[str, actionlib.ActionServer] = {}
@@ -157,17 +178,27 @@ class RosTransport:
         )
 
     def publisher_status(self, topic: str) -> PublisherStatus:
-        try:
-            publishers, _, _ = rosgraph.Master(rospy.get_name()).getSystemState()
-        except Exception as problem:  # the master itself is gone: nothing can be confirmed
-            _LOG.warning("cannot ask the ROS master about %s: %s", topic, problem)
-            return PublisherStatus.NONE
-        if not any(name == topic and nodes for name, nodes in publishers):
-            return PublisherStatus.NONE
         subscriber = self._subscribers.get(topic)
-        if subscriber is None or subscriber.get_num_connections() > 0:
-            return PublisherStatus.CONNECTED
-        return PublisherStatus.STALE
+        live = subscriber is None or subscriber.get_num_connections() > 0
+        try:
+            registered = self._registered_publishers(topic)
+        except (OSError, xmlrpc.client.Error) as problem:  # timed out, refused, gone: no wait
+            _LOG.debug("the ROS master did not answer about %s: %s", topic, problem)
+            return PublisherStatus.CONNECTED_MASTER_SILENT if live else PublisherStatus.NONE_MASTER_SILENT
+        if not registered:
+            return PublisherStatus.NONE
+        return PublisherStatus.CONNECTED if live else PublisherStatus.STALE
+
+    def _registered_publishers(self, topic: str) -> bool:
+        """Whether the master lists a publisher of ``topic``, asked with a timeout: a master that
+        does not answer (its host unreachable, the process stopped) must not hold up a check."""
+        master = xmlrpc.client.ServerProxy(
+            rosgraph.get_master_uri(), transport=_TimeoutTransport(self._timeout)
+        )
+        code, message, state = master.getSystemState(rospy.get_name())
+        if code != 1:
+            raise xmlrpc.client.Fault(code, message)
+        return any(name == topic and nodes for name, nodes in state[0])
 
     def serve(self, name: str, service: messages.ServiceType, handler: Callable[[object], object]) -> None:
         ros_service = generated_class(service.name, "srv")
@@ -290,10 +321,19 @@ class RosLogHandler(logging.Handler):
 
 
 def start_ros_node(name: str, verbose: bool) -> None:
-    """Register this process with the master and send the node's log records to rosout."""
+    """Register this process with the master and send the node's log records to rosout.
+
+    The records go through a queue to a thread of their own: rospy's rosout handler asks the master
+    for a parameter on every call, and with the master's host unreachable that call hangs, so a
+    log call on a timer thread would hold up the health checks (and every thread waiting for the
+    logging lock behind it)."""
     rospy.init_node(name)
+    records: queue.Queue[logging.LogRecord] = queue.Queue()  # novermin
+    listener = logging.handlers.QueueListener(records, RosLogHandler())
+    listener.start()
+    rospy.on_shutdown(listener.stop)
     logger = logging.getLogger("speech_event")
-    logger.addHandler(RosLogHandler())
+    logger.addHandler(logging.handlers.QueueHandler(records))
     logger.setLevel(logging.INFO if verbose else logging.WARNING)
     logger.propagate = False  # rosout prints them already
 

@@ -1,8 +1,10 @@
 """catkin_make installs the package in a robot workspace."""
 
+import os
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 from speech_event.msg import RecogniseSpeechAction
@@ -41,3 +43,14 @@ def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tm
     ):
         text = (library / "speech_event" / module).read_text()
         assert re.search(f"_md5sum = [\"']{built._md5sum}[\"']", text), module
+    # Installed, the demo finds its command grammar (package data) from any folder.
+    assert (library / "harness" / "data" / "robot_commands.txt").is_file()
+    demo = subprocess.run(
+        [sys.executable, "-m", "harness", "demo", "--voice", "tones", "--recognizer", "fake"],
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(library)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert demo.stdout.splitlines()[-1] == "/speechEvent/text at t=2.524 s: 'go to the kitchen'", demo.stderr

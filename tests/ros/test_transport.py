@@ -54,7 +54,10 @@ def _start_stand_in(environment: Dict[str, str]) -> "subprocess.Popen[str]":
         text=True,
         start_new_session=True,
     )
-    assert process.stdout is not None
+    assert process.stdout is not None and process.stdin is not None
+    assert process.stdout.readline().strip() == "started"  # a ROS node, not yet a publisher
+    process.stdin.write("advertise\n")
+    process.stdin.flush()
     assert process.stdout.readline().strip() == "ready"
     return process
 
