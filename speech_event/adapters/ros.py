@@ -195,9 +195,10 @@ class RosTransport:
         master = xmlrpc.client.ServerProxy(
             rosgraph.get_master_uri(), transport=_TimeoutTransport(self._timeout)
         )
-        code, message, state = master.getSystemState(rospy.get_name())
+        answer: Any = master.getSystemState(rospy.get_name())
+        code, message, state = answer
         if code != 1:
-            raise xmlrpc.client.Fault(code, message)
+            raise xmlrpc.client.Fault(int(code), str(message))
         return any(name == topic and nodes for name, nodes in state[0])
 
     def serve(self, name: str, service: messages.ServiceType, handler: Callable[[object], object]) -> None:
