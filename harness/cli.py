@@ -42,7 +42,7 @@ def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scena
         return run_in_memory
     from harness.ros_runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
 
-    options = RosOptions(arguments.real_time, arguments.node_command, arguments.config)
+    options = RosOptions(arguments.real_time, arguments.node_command, arguments.config, arguments.config_dir)
     replay = RosReplay(stack, options)
     return replay.play
 
@@ -54,10 +54,12 @@ SIM_TIME_HINT = (
 
 
 def _run(arguments: argparse.Namespace) -> int:
-    if arguments.transport == "memory" and (arguments.real_time or arguments.node_command):
+    if arguments.transport == "memory" and (
+        arguments.real_time or arguments.node_command or arguments.config_dir
+    ):
         raise ScenarioError(
-            "--real-time and --node-command need --transport ros: in memory the node under test is ours, "
-            "on a fake clock"
+            "--real-time, --node-command and --config-dir need --transport ros: in memory the node under "
+            "test is ours, on a fake clock"
         )
     base = _base_config(arguments.config)
     scenarios = [load_scenario(path, base) for path in arguments.files]
@@ -121,6 +123,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         "configuration file with the scenario's settings; {recognizer}: the engine the scenario names)",
     )
     run.add_argument("-c", "--config", help="configuration file the scenarios' [config] overrides")
+    run.add_argument(
+        "--config-dir",
+        help="ros: write the node's configuration file here (a folder a node on another host can read)",
+    )
     run.set_defaults(handler=_run)
     demo = commands.add_parser("demo", help="speech in, text out: the node on the in-memory bus")
     demo.add_argument("text", nargs="?", default="go to the kitchen")

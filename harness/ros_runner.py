@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.parse
 import xmlrpc.client
 from collections import defaultdict
 from contextlib import ExitStack, closing
@@ -177,6 +178,16 @@ class RosOptions:
     real_time: bool = False
     node_command: Optional[str] = None
     base_config: Optional[str] = None
+    # Where the node's configuration file is written (a folder a node on another host can read).
+    config_dir: Optional[str] = None
+
+
+def route_address(master_uri: str) -> str:
+    """This host's address on the route to the master (no packet is sent: UDP connect only)."""
+    address = urllib.parse.urlsplit(master_uri)
+    with closing(socket.socket(socket.AF_INET, socket.SOCK_DGRAM)) as probe:
+        probe.connect((address.hostname or "127.0.0.1", address.port or 11311))
+        return str(probe.getsockname()[0])
 
 
 class RosReplay:
@@ -186,17 +197,24 @@ class RosReplay:
         self._options = options
         self._work = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="speech_event_ros_")))
         environment = dict(os.environ)
-        environment.setdefault("ROS_IP", "127.0.0.1")
         environment["ROS_HOME"] = str(self._work / "ros_home")
         environment["ROS_LOG_DIR"] = str(self._work / "ros_log")
         environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), environment.get("PYTHONPATH")]))
         self.processes = Processes(environment, self._work)
         stack.callback(self.processes.stop_all)
         if "ROS_MASTER_URI" not in os.environ:
+            # Our own master, on loopback: everything of this replay stays on this host.
             port = free_port()
             environment["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+            environment.setdefault("ROS_IP", "127.0.0.1")
             self.processes.start("roscore", ["roscore", "-p", str(port)])
-        os.environ.update({key: environment[key] for key in ("ROS_MASTER_URI", "ROS_IP")})
+        elif not ({"ROS_IP", "ROS_HOSTNAME"} & set(environment)):
+            # A given master, maybe on another host: be reachable from there (the user's ROS_IP
+            # or ROS_HOSTNAME wins).
+            environment["ROS_IP"] = route_address(environment["ROS_MASTER_URI"])
+        os.environ.update(
+            {key: environment[key] for key in ("ROS_MASTER_URI", "ROS_IP") if key in environment}
+        )
         self._master = rosgraph.Master("/speechEventReplay", master_uri=environment["ROS_MASTER_URI"])
         _wait_until(
             self._master_answers, "the ROS master at " + environment["ROS_MASTER_URI"], STARTUP_TIMEOUT
@@ -291,7 +309,8 @@ class RosReplay:
 
     def _start_node(self, scenario: Scenario) -> "subprocess.Popen[str]":
         engine, config = engine_for(scenario.recognizer, scenario.config)
-        config_path = self._work / "speech_event_configuration.ini"
+        config_dir = Path(self._options.config_dir) if self._options.config_dir else self._work
+        config_path = config_dir / "speech_event_configuration.ini"
         config_path.write_text(format_config(config))
         if self._options.node_command:
             # Split first, then fill in: a path with spaces stays one word, other braces stay as written.
@@ -352,7 +371,12 @@ class RosReplay:
         """The node's live connections on the signal topic, as getBusStats gives them:
         [connection id, bytes received, messages received, drop estimate, connected]."""
         proxy = xmlrpc.client.ServerProxy(node_uri)
-        stats: Any = proxy.getBusStats("/speechEventReplay")
+        try:
+            stats: Any = proxy.getBusStats("/speechEventReplay")
+        except (OSError, xmlrpc.client.Error) as problem:  # the node's host or process gone
+            raise ReplayError(
+                f"the node under test at {node_uri} did not answer getBusStats: {problem}"
+            ) from None
         subscriptions = stats[2][1]
         return [
             c for topic, connections in subscriptions if topic == SIGNAL_TOPIC for c in connections if c[4]

@@ -75,6 +75,7 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
         RosClock,
         RosTransport,
         announce_start,
+        signals_held,
         start_ros_node,
         wait_for_shutdown,
     )
@@ -82,13 +83,14 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
 
     start_ros_node(NODE_NAME, verbose=config.verbose_mode)
     executor = ThreadExecutor()
-    # Every check ends within its period, whatever the network does to the master.
-    transport = RosTransport(master_timeout=min(1.0, config.health_check_period / 2))
-    node = SpeechEventNode(
-        config, transport, RosClock(), recognizer, executor, engine_builder(name, config), screen
-    )
-    node.start()
-    announce_start(node.started_at)
+    with signals_held():  # a Ctrl-C during registration would deadlock rospy: it comes after
+        # Every check ends within its period, whatever the network does to the master.
+        transport = RosTransport(master_timeout=min(1.0, config.health_check_period / 2))
+        node = SpeechEventNode(
+            config, transport, RosClock(), recognizer, executor, engine_builder(name, config), screen
+        )
+        node.start()
+        announce_start(node.started_at)
     wait_for_shutdown()
     node.stop()
     logger = logging.getLogger("speech_event")

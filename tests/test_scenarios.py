@@ -161,14 +161,16 @@ def test_the_demo_with_the_tones_voice_and_the_fake_recognizer() -> None:
     ]
 
 
-@pytest.mark.parametrize("option", [["--real-time"], ["--node-command", "other_node {config}"]])
+@pytest.mark.parametrize(
+    "option", [["--real-time"], ["--node-command", "other_node {config}"], ["--config-dir", "/tmp"]]
+)
 def test_ros_only_options_are_refused_in_memory(option: List[str]) -> None:
     result = _harness("run", *option, "scenarios/single_utterance.toml")
     assert result.returncode == 2
     assert result.stdout == ""
     assert result.stderr == (
-        "error: --real-time and --node-command need --transport ros: in memory the node under test is ours, "
-        "on a fake clock\n"
+        "error: --real-time, --node-command and --config-dir need --transport ros: in memory the node under "
+        "test is ours, on a fake clock\n"
     )
 
 

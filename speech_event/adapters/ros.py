@@ -9,15 +9,18 @@ action an actionlib ActionServer, over the classes genpy builds from srv/ and ac
 dataclasses of speech_event.messages, field by field.
 """
 
+import contextlib
 import dataclasses
 import http.client
 import importlib
 import logging
 import logging.handlers
+import os
 import queue
+import signal
 import threading
 import xmlrpc.client
-from typing import Any, Callable, Dict
+from typing import Any, Callable, Dict, Iterator, List
 
 import actionlib
 import rosgraph
@@ -330,13 +333,35 @@ def start_ros_node(name: str, verbose: bool) -> None:
     logging lock behind it)."""
     rospy.init_node(name)
     records: queue.Queue[logging.LogRecord] = queue.Queue()  # novermin
-    listener = logging.handlers.QueueListener(records, RosLogHandler())
-    listener.start()
-    rospy.on_shutdown(listener.stop)
+    # Its thread is a daemon and is never joined: rospy runs shutdown hooks in the SIGINT handler,
+    # on a main thread that may hold a logging lock the listener waits for.
+    logging.handlers.QueueListener(records, RosLogHandler()).start()
     logger = logging.getLogger("speech_event")
     logger.addHandler(logging.handlers.QueueHandler(records))
     logger.setLevel(logging.INFO if verbose else logging.WARNING)
     logger.propagate = False  # rosout prints them already
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM while the node registers, and deliver them after.
+
+    rospy's signal handler unregisters through the same locked master proxy that a registration
+    in progress holds: a Ctrl-C that lands inside one (the node registers a dozen topics and
+    services at start) deadlocks the node for good (seen: rospy.core _LockedServerProxy, called
+    from RegManager.cleanup inside RegManager.reg_added)."""
+    held: List[int] = []
+    previous = {sig: signal.signal(sig, lambda number, frame: held.append(number)) for sig in _HELD}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for number in held:
+            os.kill(os.getpid(), number)
+
+
+_HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 def announce_start(started_at: float) -> None:

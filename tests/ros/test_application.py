@@ -4,11 +4,13 @@ import os
 import signal
 import subprocess
 import sys
+import time
 import wave
 from pathlib import Path
 from typing import Dict, List, Tuple
 
 import numpy as np
+import pytest
 import rosgraph
 import rospy
 from std_msgs import msg as std_msgs
@@ -30,17 +32,21 @@ def _start_node(roscore: Dict[str, str], work: Path) -> "Tuple[Processes, subpro
     return processes, processes.start("node", [sys.executable, str(APPLICATION), "--recognizer", "fake"])
 
 
+@pytest.mark.parametrize("attempt", range(4))
 def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(
-    roscore: Dict[str, str], tmp_path: Path
+    roscore: Dict[str, str], tmp_path: Path, attempt: int
 ) -> None:
+    """Ctrl-C as soon as it subscribes: it is still registering its services and action then, and
+    rospy's own handler deadlocked on a registration in progress before the node held signals during
+    start-up (seen in CI, and within 15 attempts of a loop here; it depends on timing, so this test
+    does not hit that window every run: several attempts make it likelier)."""
     processes, node = _start_node(roscore, tmp_path)
     master = rosgraph.Master("/applicationTest")
     try:
-        wait_for(
-            lambda: "/speechEvent" in _subscribers(master, SIGNAL_TOPIC),
-            "/speechEvent to subscribe",
-            60,
-        )
+        deadline = time.monotonic() + 60
+        while "/speechEvent" not in _subscribers(master, SIGNAL_TOPIC):
+            assert time.monotonic() < deadline, "/speechEvent did not subscribe"
+            time.sleep(0.005)
         os.killpg(node.pid, signal.SIGINT)
         assert node.wait(SHUTDOWN_GRACE_SECONDS + 10) == 0
         wait_for(lambda: "/speechEvent" not in _subscribers(master, SIGNAL_TOPIC), "unsubscribed")

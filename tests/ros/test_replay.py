@@ -11,7 +11,7 @@ from typing import Dict, Set
 import pytest
 import rosgraph
 
-from harness.ros_runner import descendants
+from harness.ros_runner import descendants, route_address
 from tests.ros.conftest import ROOT, ros_environment
 
 SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
@@ -134,12 +134,14 @@ def test_a_node_command_that_does_not_exist_is_one_clear_error(tmp_path: Path) -
 
 
 def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[str, str]) -> None:
-    rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"]).setParam("/use_sim_time", False)
-    result = _harness(roscore, "scenarios/single_utterance.toml")
-    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
-    assert (
-        rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"]).getParam("/use_sim_time") is True
-    )
+    master = rosgraph.Master("/replayTest", master_uri=roscore["ROS_MASTER_URI"])
+    master.setParam("/use_sim_time", False)
+    try:
+        result = _harness(roscore, "scenarios/single_utterance.toml")
+        assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+        assert master.getParam("/use_sim_time") is True
+    finally:  # the session's roscore: later tests' nodes run on the wall clock
+        master.setParam("/use_sim_time", False)
 
 
 @pytest.mark.parametrize(
@@ -178,3 +180,31 @@ def test_ctrl_c_or_sigterm_stops_every_process_the_replay_started(
     assert stderr.endswith(said + "\n")
     alive = {pid for pid in started if Path(f"/proc/{pid}").exists()}
     assert alive == set()
+
+
+def test_the_route_to_a_given_master_gives_the_address_to_be_reached_at() -> None:
+    assert route_address("http://127.0.0.1:11311") == "127.0.0.1"
+    assert route_address("http://localhost:1234/") == "127.0.0.1"
+
+
+def test_config_dir_puts_the_nodes_configuration_where_a_node_elsewhere_can_read_it(tmp_path: Path) -> None:
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    seen = tmp_path / "seen.txt"
+    wrapper = tmp_path / "other_node.py"
+    wrapper.write_text(
+        "import sys\n"
+        f"open({str(seen)!r}, 'w').write(sys.argv[1])\n"
+        "from speech_event.application import main\n"
+        "sys.exit(main(['-c', sys.argv[1], '--recognizer', 'fake']))\n"
+    )
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--config-dir",
+        str(shared),
+        "--node-command",
+        f"{sys.executable} {wrapper} {{config}}",
+        "scenarios/single_utterance.toml",
+    )
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+    assert seen.read_text() == str(shared / "speech_event_configuration.ini")

@@ -57,6 +57,7 @@ def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> I
     config = work / "speech_event.ini"
     config.write_text("health_check_period 1\nspeech_pause_period 0.5\n")
     processes = Processes(roscore, work)
+    rospy.set_param("/use_sim_time", False)  # wall time: nobody drives /clock here
     processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
     try:
         # up: its services, and the action it registers last
