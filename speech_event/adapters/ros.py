@@ -20,7 +20,7 @@ import queue
 import signal
 import threading
 import xmlrpc.client
-from typing import Any, Callable, Dict, Iterator, List
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 import actionlib
 import rosgraph
@@ -166,6 +166,7 @@ class RosTransport:
         # Goals by id: actionlib hands the cancel callback a new handle object for the same goal.
         self._goals: Dict[str, RosActionGoal] = {}
         self._goals_lock = threading.Lock()
+        self._registering: Optional[threading.Thread] = None
 
     def advertise(self, topic: str, message_type: type) -> RosPublisher:
         ros_type = _ROS_TYPES.get(message_type, message_type)
@@ -184,17 +185,20 @@ class RosTransport:
         subscriber = self._subscribers.get(topic)
         live = subscriber is None or subscriber.get_num_connections() > 0
         try:
-            registered = self._registered_publishers(topic)
+            publishers, subscribers = self._master_lists(topic)
         except (OSError, xmlrpc.client.Error) as problem:  # timed out, refused, gone: no wait
             _LOG.debug("the ROS master did not answer about %s: %s", topic, problem)
             return PublisherStatus.CONNECTED_MASTER_SILENT if live else PublisherStatus.NONE_MASTER_SILENT
-        if not registered:
+        if subscriber is not None and rospy.get_name() not in subscribers:
+            self._register_again()  # a new master (restarted) that does not know this node
+        if not publishers:
             return PublisherStatus.NONE
         return PublisherStatus.CONNECTED if live else PublisherStatus.STALE
 
-    def _registered_publishers(self, topic: str) -> bool:
-        """Whether the master lists a publisher of ``topic``, asked with a timeout: a master that
-        does not answer (its host unreachable, the process stopped) must not hold up a check."""
+    def _master_lists(self, topic: str) -> Tuple[List[str], List[str]]:
+        """The publishers and subscribers the master lists for ``topic``, asked with a timeout: a
+        master that does not answer (its host unreachable, the process stopped) must not hold up
+        a check."""
         master = xmlrpc.client.ServerProxy(
             rosgraph.get_master_uri(), transport=_TimeoutTransport(self._timeout)
         )
@@ -202,7 +206,21 @@ class RosTransport:
         code, message, state = answer
         if code != 1:
             raise xmlrpc.client.Fault(int(code), str(message))
-        return any(name == topic and nodes for name, nodes in state[0])
+
+        def nodes(listing: List[Any]) -> List[str]:
+            return [node for name, names in listing if name == topic for node in names]
+
+        return nodes(state[0]), nodes(state[1])
+
+    def _register_again(self) -> None:
+        """Register every publication, subscription and service of this process with the master
+        again, on a thread of its own (rospy retries until the master takes them). rospy does not
+        do it by itself when roscore is restarted."""
+        with self._goals_lock:
+            if self._registering is not None and self._registering.is_alive():
+                return
+            self._registering = threading.Thread(target=_register_everything, name="speech_event_register")
+            self._registering.start()
 
     def serve(self, name: str, service: messages.ServiceType, handler: Callable[[object], object]) -> None:
         ros_service = generated_class(service.name, "srv")
@@ -340,6 +358,27 @@ def start_ros_node(name: str, verbose: bool) -> None:
     logger.addHandler(logging.handlers.QueueHandler(records))
     logger.setLevel(logging.INFO if verbose else logging.WARNING)
     logger.propagate = False  # rosout prints them already
+
+
+def _register_everything() -> None:
+    from rospy.impl.registration import (
+        Registration,
+        get_registration_listeners,
+        get_service_manager,
+        get_topic_manager,
+    )
+
+    _LOG.warning(
+        "the ROS master does not know this node (restarted?): registering its topics and services again"
+    )
+    listeners = get_registration_listeners()
+    topics = get_topic_manager()
+    for name, kind in topics.get_publications():
+        listeners.notify_added(name, kind, Registration.PUB)
+    for name, kind in topics.get_subscriptions():
+        listeners.notify_added(name, kind, Registration.SUB)
+    for name, uri in get_service_manager().get_services():
+        listeners.notify_added(name, uri, Registration.SRV)
 
 
 @contextlib.contextmanager

@@ -8,10 +8,13 @@ once. Topics are peer to peer, so a subscriber that is already connected must go
 
 import os
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Dict, List, Tuple
+
+import rosgraph
 
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SOUND_DETECTION_DOWN
@@ -74,3 +77,50 @@ def test_a_frozen_master_does_not_delay_the_health_checks(tmp_path: Path) -> Non
         assert len([at for at, _ in received if thawed < at <= thawed + 0.5]) <= 1
     finally:
         processes.stop_all()
+
+
+def test_after_a_master_restart_the_node_registers_again_and_goes_on(tmp_path: Path) -> None:
+    """roscore restarted on the same URI knows nothing of the running node; rospy does not register
+    again by itself. The node's next check notices and registers its topics and services again."""
+    port = free_port()
+    environment: Dict[str, str] = ros_environment(port, tmp_path)
+    uri = environment["ROS_MASTER_URI"]
+    processes = Processes(environment, tmp_path)
+    try:
+        roscore = processes.start("roscore", ["roscore", "-p", str(port)])
+        wait_for(lambda: master_answers(uri), "roscore")
+        config = tmp_path / "node.ini"
+        config.write_text(f"health_check_period {PERIOD}\n")
+        processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
+        wait_for(lambda: _serves(uri, "/speechEvent/set_language"), "the node's services", 60)
+        processes.stop(roscore)
+        assert not master_answers(uri)
+        processes.start("roscore_again", ["roscore", "-p", str(port)])
+        wait_for(lambda: master_answers(uri), "the new roscore")
+        wait_for(lambda: _serves(uri, "/speechEvent/set_language"), "set_language registered again", 30)
+        publishers, subscribers, _ = rosgraph.Master("/probe", master_uri=uri).getSystemState()
+        assert ["/speechEvent/text", ["/speechEvent"]] in publishers
+        assert ["/soundDetection/signal", ["/speechEvent"]] in subscribers
+        assert ["/speechEvent/recognise_speech_action/goal", ["/speechEvent"]] in subscribers
+        # A newcomer finds the node through the new master: a listener hears its errors, and the
+        # Behaviour Controller's service call is answered.
+        (tmp_path / "listener.py").write_text(LISTENER)
+        processes.start("listener", [sys.executable, str(tmp_path / "listener.py")])
+        wait_for(lambda: len(_received(processes.log("listener"))) >= 2, "the listener to hear the node", 60)
+        call = subprocess.run(
+            ["rosservice", "call", "/speechEvent/set_enabled", "status: 'true'"],
+            env=environment,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert call.stdout.strip() == "response: 1", call.stderr
+    finally:
+        processes.stop_all()
+
+
+def _serves(uri: str, service: str) -> bool:
+    try:
+        return bool(rosgraph.Master("/probe", master_uri=uri).lookupService(service))
+    except Exception:
+        return False
