@@ -128,9 +128,11 @@ def test_a_node_command_that_does_not_exist_is_one_clear_error(tmp_path: Path) -
         "scenarios/single_utterance.toml",
     )
     assert result.returncode == 1
-    assert result.stderr == (
-        "error: the replay could not go on: cannot start the node (/no/such/node): No such file or directory\n"
+    # one line of ours (rospy may log its own connection warnings before it), no traceback
+    assert result.stderr.splitlines()[-1] == (
+        "error: the replay could not go on: cannot start the node (/no/such/node): No such file or directory"
     )
+    assert "Traceback" not in result.stderr
 
 
 def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[str, str]) -> None:
