@@ -65,7 +65,9 @@ def read_wav(path: Union[str, Path], sample_rate: int) -> np.ndarray:
     else:
         samples = np.frombuffer(frames, dtype=f"<i{width}").astype(np.float32)
     mono = (samples / _PCM_SCALE[width]).reshape(-1, channels).mean(axis=1)
-    return resample(mono.astype(np.float32), rate, sample_rate)
+    # Resampling full-scale audio overshoots (to about 1.05): clipped here, as the node accepts
+    # only [-1, 1] and would otherwise clip every such block itself.
+    return np.asarray(np.clip(resample(mono.astype(np.float32), rate, sample_rate), -1.0, 1.0))
 
 
 def speech_chunks(audio: np.ndarray, config: DriverConfig) -> List[Tuple[int, np.ndarray]]:

@@ -106,3 +106,17 @@ def test_a_recorded_session_played_by_the_driver_is_transcribed_and_silence_is_n
     assert published == ["turn on the light", "thank you"]
     total_chunks = -(-session.size // config.chunk_size)
     assert 0 < len(blocks) < total_chunks / 2  # the silence was not published
+
+
+def test_a_full_scale_wav_resampled_stays_within_minus_one_to_one(tmp_path: Path) -> None:
+    """A square wave at full scale overshoots after resampling (Gibbs): the reader clips it, so the
+    node never sees a block outside [-1, 1] from a WAV file."""
+    path = tmp_path / "loud.wav"
+    square = np.where(np.arange(16000) % 40 < 20, 32767, -32768).astype("<i2")
+    with wave.open(str(path), "wb") as wav:
+        wav.setnchannels(1)
+        wav.setsampwidth(2)
+        wav.setframerate(16000)
+        wav.writeframes(square.tobytes())
+    audio = read_wav(path, 48000)
+    assert float(np.max(np.abs(audio))) == 1.0
