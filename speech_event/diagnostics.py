@@ -80,11 +80,6 @@ class NodeStatistics:
         with self._lock:
             self._counts.ignored_while_disabled += 1
 
-    @property
-    def waiting(self) -> int:
-        with self._lock:
-            return self._counts.waiting
-
     def status(self, state: NodeState, discard_reasons: List[str]) -> DiagnosticStatus:
         with self._lock:
             counts = self._counts

@@ -134,9 +134,6 @@ class InMemoryBus:
     def serve(self, name: str, service: ServiceType, handler: Callable[[object], object]) -> None:
         self._services[name] = handler
 
-    def has_service(self, name: str) -> bool:
-        return name in self._services
-
     def call(self, name: str, request: object) -> object:
         """Call service ``name``, as rospy.ServiceProxy does: KeyError when nobody serves it."""
         return self._services[name](request)
