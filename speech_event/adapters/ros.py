@@ -215,7 +215,10 @@ class RosTransport:
     def _register_again(self) -> None:
         """Register every publication, subscription and service of this process with the master
         again, on a thread of its own (rospy retries until the master takes them). rospy does not
-        do it by itself when roscore is restarted."""
+        do it by itself when roscore is restarted. Not while shutting down: rospy has unregistered
+        everything then, and the master rightly does not know this node any more."""
+        if rospy.core.is_shutdown_requested():
+            return
         with self._goals_lock:
             if self._registering is not None and self._registering.is_alive():
                 return

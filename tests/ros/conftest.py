@@ -5,7 +5,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Dict, Iterator
+from typing import Dict, Iterator, Optional
 
 import pytest
 import rosgraph
@@ -35,6 +35,14 @@ def wait_for(condition, what: str, timeout: float = 30.0) -> None:  # type: igno
         if time.monotonic() > deadline:
             raise AssertionError(f"gave up after {timeout:.0f} s waiting for {what}")
         time.sleep(0.01)
+
+
+def serves(service: str, uri: Optional[str] = None) -> bool:
+    """Whether the master (ROS_MASTER_URI's unless ``uri``) lists ``service``; no answer is no."""
+    try:
+        return bool(rosgraph.Master("/probe", master_uri=uri).lookupService(service))
+    except Exception:
+        return False
 
 
 def master_answers(uri: str) -> bool:

@@ -11,7 +11,7 @@ import rosgraph
 
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from tests.ros.conftest import ROOT, ros_environment, wait_for
+from tests.ros.conftest import ROOT, ros_environment, serves, wait_for
 
 LAUNCH = ROOT / "launch"
 
@@ -43,7 +43,7 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
         wait_for(node_is_up, "/speechEvent to subscribe and advertise", timeout=60)
         # What the Behaviour Controller and the action clients look for
         for service in ("/speechEvent/set_enabled", "/speechEvent/set_language"):
-            wait_for(lambda service=service: _serves(master, service), service)
+            wait_for(lambda service=service: serves(service, master.master_uri), service)
         action = "/speechEvent/recognise_speech_action"
 
         def action_and_diagnostics_are_up() -> bool:
@@ -62,13 +62,6 @@ def test_the_robot_launch_brings_up_the_node_and_sigint_stops_it(tmp_path: Path)
         wait_for(lambda: not any(Path(f"/proc/{pid}").exists() for pid in started), "all of it to stop", 30)
     finally:
         processes.stop_all()
-
-
-def _serves(master: rosgraph.Master, service: str) -> bool:
-    try:
-        return bool(master.lookupService(service))
-    except Exception:
-        return False
 
 
 def _test_harness_launch(tmp_path: Path, scenario: Path) -> str:

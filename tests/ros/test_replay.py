@@ -153,16 +153,12 @@ def test_a_given_ros_master_uri_is_used_instead_of_a_new_roscore(roscore: Dict[s
 def test_ctrl_c_or_sigterm_stops_every_process_the_replay_started(
     tmp_path: Path, stop_signal: int, status: int, said: str
 ) -> None:
+    # Ten minutes on the wall clock: the signal always comes while it plays (a short sim-time
+    # scenario could end first, and the harness exit 0).
+    long = tmp_path / "long.toml"
+    long.write_text('name = "long"\n[[steps]]\nsilence = 600.0\n[expect]\npublished = []\n')
     harness = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "harness",
-            "run",
-            "--transport",
-            "ros",
-            "scenarios/silence_is_not_an_outage.toml",
-        ],
+        [sys.executable, "-m", "harness", "run", "--transport", "ros", "--real-time", str(long)],
         cwd=ROOT,
         env=_own_roscore_environment(tmp_path),
         stdout=subprocess.PIPE,

@@ -25,7 +25,7 @@ from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
 from tests.application import APPLICATION
-from tests.ros.conftest import wait_for
+from tests.ros.conftest import serves, wait_for
 
 ROBOT_PACKAGE = "cssr_system"
 ACTION = "/speechEvent/recognise_speech_action"
@@ -61,11 +61,9 @@ def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> I
     processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
     try:
         # up: its services, and the action it registers last
-        wait_for(lambda: _has_service("/speechEvent/set_enabled"), "the node's set_enabled", 60)
-        wait_for(lambda: _has_service("/speechEvent/set_language"), "the node's set_language", 60)
-        wait_for(
-            lambda: _has_service("/speechEvent/set_language") and _publishes(f"{ACTION}/status"), "the action"
-        )
+        wait_for(lambda: serves("/speechEvent/set_enabled"), "the node's set_enabled", 60)
+        wait_for(lambda: serves("/speechEvent/set_language"), "the node's set_language", 60)
+        wait_for(lambda: serves("/speechEvent/set_language") and _publishes(f"{ACTION}/status"), "the action")
         yield
     finally:
         processes.stop_all()
@@ -74,14 +72,6 @@ def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> I
 def _publishes(topic: str) -> bool:
     publishers, _, _ = rosgraph.Master("/probe").getSystemState()
     return any(name == topic and nodes for name, nodes in publishers)
-
-
-def _has_service(name: str) -> bool:
-    try:
-        rosgraph.Master("/probe").lookupService(name)
-        return True
-    except Exception:
-        return False
 
 
 def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: None) -> None:
