@@ -12,6 +12,7 @@ from typing import Callable, List, Optional
 from harness.catalog import RECOGNIZERS, VOICES
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome
+from harness.replay_storage import replay_storage
 from harness.report import passed, report
 from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
 from speech_event.asr.errors import ModelError
@@ -108,6 +109,10 @@ def _demo(arguments: argparse.Namespace) -> int:
     return 0
 
 
+def _replay_storage(arguments: argparse.Namespace) -> int:
+    return replay_storage(arguments.directory, arguments.recognizer, _base_config(arguments.config))
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m harness", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -140,6 +145,15 @@ def main(argv: Optional[List[str]] = None) -> int:
         "'' for its language model",
     )
     demo.set_defaults(handler=_demo)
+    storage = commands.add_parser(
+        "replay-storage",
+        help="replay a folder of stored utterances (audio_storage_dir) and show which transcriptions "
+        "changed; exit 1 when any did",
+    )
+    storage.add_argument("directory", metavar="DIR")
+    storage.add_argument("-c", "--config", help="configuration file of the node under test")
+    storage.add_argument("--recognizer", choices=sorted(RECOGNIZERS), default="auto", help="default: auto")
+    storage.set_defaults(handler=_replay_storage)
     arguments = parser.parse_args(argv)
     # SIGTERM (a CI time limit, timeout(1)) unwinds like Ctrl-C, so replay processes are stopped.
     signal.signal(signal.SIGTERM, _terminate)

@@ -74,4 +74,5 @@ def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> Outco
     clock.advance_to(timeline.end)
     clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
     node.stop()
+    node.flush_storage()
     return outcome

@@ -15,6 +15,7 @@ from speech_event.config import ConfigError, SpeechEventConfig, load_config
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS, engine_builder
 from speech_event.speech_screen import SpeechScreen, speech_screen_for
+from speech_event.storage import StorageError, check_storage_dir
 
 NODE_NAME = "speechEvent"
 # What ``run`` imports from ROS 1: a missing one means no ROS here, not a bug.
@@ -96,6 +97,7 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
     logger = logging.getLogger("speech_event")
     if not executor.shutdown(SHUTDOWN_GRACE_SECONDS):
         logger.warning("abandoned a recognition still running after %.0f s", SHUTDOWN_GRACE_SECONDS)
+    node.flush_storage()
 
 
 def without_remappings(argv: Optional[List[str]]) -> List[str]:
@@ -114,7 +116,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         config = load_config(arguments.config) if arguments.config else SpeechEventConfig()
         recognizer = build_recognizer(config, arguments.recognizer)
         screen = build_screen(config)
-    except ConfigError as problem:
+        if config.audio_storage_dir:
+            check_storage_dir(config.audio_storage_dir)
+    except (ConfigError, StorageError) as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
     try:

@@ -28,8 +28,10 @@ class SpeechEventConfig:
     verbose_mode: bool = False
     rw_model_path: str = ""
     en_model_path: str = ""
-    # Empty: utterances are not stored. Otherwise each utterance is written there as a WAV file.
+    # Empty: utterances are not stored. Otherwise each utterance is written there as a 16 kHz WAV
+    # file with a line in index.jsonl (speech_event/storage.py), the folder kept under this size.
     audio_storage_dir: str = ""
+    audio_storage_max_mb: float = 500.0
     cuda: bool = False
     sample_rate: int = 48000
     speech_pause_period: float = 1.5
@@ -106,6 +108,7 @@ _FORMAT = KeyValueFormat(
         "rw_model_path": KeyRule(text, "a path"),
         "en_model_path": KeyRule(text, "a path"),
         "audio_storage_dir": KeyRule(text, "a directory path, or nothing to store no audio"),
+        "audio_storage_max_mb": KeyRule(number(float, 1.0, 10.0**7), "a number of MiB, 1 or more"),
         "cuda": KeyRule(boolean, "true or false"),
         "sample_rate": KeyRule(number(int, 8000, 192000), "an integer number of Hz from 8000 to 192000"),
         # Below 0.2 s the gaps inside speech end utterances: words come out cut into letters.

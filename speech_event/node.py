@@ -56,7 +56,7 @@ from speech_event.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.rejections import RejectionLog
 from speech_event.resample import resample
 from speech_event.speech_screen import Discard, SpeechScreen, speech_screen_for
-from speech_event.storage import UtteranceStore
+from speech_event.storage import StoredUtterance, UtteranceStore
 from speech_event.transcript_text import checked_transcript, text_to_publish
 from speech_event.validate import Rejection, validate_signal
 
@@ -93,7 +93,9 @@ class SpeechEventNode:
         )
         self._rejections = RejectionLog(clock.now, SIGNAL_TOPIC)
         self._store = (
-            UtteranceStore(config.audio_storage_dir, config.sample_rate) if config.audio_storage_dir else None
+            UtteranceStore(config.audio_storage_dir, config.sample_rate, config.audio_storage_max_mb)
+            if config.audio_storage_dir
+            else None
         )
         self._statistics = NodeStatistics()
         self._queue = RecognitionQueue(config.max_backlog)
@@ -187,6 +189,11 @@ class SpeechEventNode:
                 self._pause_timer.cancel()
                 self._pause_timer = None
 
+    def flush_storage(self) -> None:
+        """Wait until every utterance transcribed so far is stored (when storing is on)."""
+        if self._store is not None:
+            self._store.flush()
+
     # -- message in -> validate -> assemble ---------------------------------------------------------
 
     def on_signal(self, message: object) -> None:
@@ -244,7 +251,9 @@ class SpeechEventNode:
         seconds = audio.size / self._config.sample_rate
         self._statistics.queued(seconds)
         self._action.utterance_closed(number, started_at, more_follows)
-        for dropped in self._queue.put(RecognitionJob(number, closed_at, audio, recognizer, seconds)):
+        for dropped in self._queue.put(
+            RecognitionJob(number, started_at, closed_at, audio, recognizer, self._language, seconds)
+        ):
             self._statistics.finished(dropped.seconds)
             self._statistics.discarded(DISCARDED_BACKLOG)
             self._action.utterance_done(dropped.number, None)
@@ -295,21 +304,21 @@ class SpeechEventNode:
         number, recognizer, seconds = job.number, job.recognizer, job.seconds
         discard: Optional[Discard] = None
         text: Optional[str] = None
+        took = 0.0
+        transcript = Transcript("")
         try:
-            if self._store is not None:
-                self._store.save(number, job.closed_at, job.audio)
             speech = resample(job.audio, self._config.sample_rate, recognizer.sample_rate)
             discard = self._screen.discard(speech, recognizer.sample_rate)
             if discard is None:
                 began = self._stopwatch()
                 result = recognizer.transcribe(speech)
-                self._statistics.transcribed(seconds, self._stopwatch() - began)
+                took = self._stopwatch() - began
+                self._statistics.transcribed(seconds, took)
                 transcript = checked_transcript(result, number)
         # A failed recognition, or an engine that answers with something else than a transcript,
         # must not stop the node; SystemExit from an engine is a failure like any other.
         except (Exception, SystemExit):
             _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
-            transcript = Transcript("")
         finally:
             self._statistics.finished(seconds)
         if discard is not None:
@@ -322,6 +331,20 @@ class SpeechEventNode:
                 self._publish(text)
                 self._statistics.published()
         self._action.utterance_done(number, None if discard is not None else text or "")
+        if self._store is not None:  # after publishing: storing never delays or loses a transcript
+            self._store.save(
+                number,
+                job.started_at,
+                job.audio,
+                functools.partial(
+                    StoredUtterance,
+                    language=job.language,
+                    engine=type(recognizer).__name__,
+                    transcript=transcript.text,
+                    published=text,
+                    recognition_time=round(took, 6),
+                ),
+            )
 
     # -- runtime control --------------------------------------------------------------------------
 

@@ -22,9 +22,11 @@ _LOG = logging.getLogger("speech_event")
 @dataclass(frozen=True)
 class RecognitionJob:
     number: int
+    started_at: float  # when its first block arrived
     closed_at: float
     audio: np.ndarray
     recognizer: Recognizer  # the engine in use when the utterance closed
+    language: str  # the language of that engine
     seconds: float
 
 

@@ -1,6 +1,4 @@
 import logging
-import wave
-from pathlib import Path
 from typing import Callable, Dict, List
 
 import numpy as np
@@ -109,20 +107,6 @@ def test_a_failing_recognition_is_logged_and_the_node_goes_on(caplog: pytest.Log
         rig.clock.advance(2.0)
     assert rig.texts() == ["heard"]
     assert [r.getMessage() for r in caplog.records] == ["recognition of utterance 1 (0.25 s) failed"]
-
-
-def test_utterances_are_stored_as_wav_when_audio_storage_dir_is_set(tmp_path: Path) -> None:
-    config = SpeechEventConfig(sample_rate=16000, audio_storage_dir=str(tmp_path / "audio"))
-    rig = Rig(config, SpyRecognizer())
-    samples = np.linspace(-1.0, 1.0, 5000, dtype=np.float32)
-    rig.speak(samples)
-    rig.clock.advance(2.0)
-    (stored,) = sorted((tmp_path / "audio").iterdir())
-    assert stored.name == "utterance_00001_2.012.wav"  # 2 blocks of 0.256 s, then the 1.5 s pause
-    with wave.open(str(stored)) as wav:
-        assert (wav.getnchannels(), wav.getsampwidth(), wav.getframerate()) == (1, 2, 16000)
-        pcm = np.frombuffer(wav.readframes(wav.getnframes()), dtype="<i2")
-    assert np.array_equal(pcm, np.round(samples * 32767).astype(np.int16))
 
 
 def test_stop_cancels_the_timers() -> None:
