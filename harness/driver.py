@@ -1,21 +1,21 @@
 """The seed's driver: a soundDetection stand-in that publishes a WAV file as the robot's driver
 publishes its microphone (config/speech_event_driver.ini, the seed's Table 2).
 
-Like the robot's driver, it cuts the audio into ``chunk_size``-sample chunks; a chunk counts as
-speech when any sample reaches ``speech_amplitude_threshold``; chunks within
-``utterance_time_buffer`` samples of speech are published too (pre-roll and hang-over); the rest is
-silence and is not published at all. Chunks go out paced in real time on the Clock it is given, so
-the same code plays to the in-memory bus (tests) and to ROS (scripts/speech_event_driver.py), and
-a session stored with ``audio_storage_dir`` can be played back to the node.
+Like the robot's driver, it publishes only speech: harness/gate.py says exactly what (chunks with
+a sample at ``speech_amplitude_threshold``, ``utterance_time_buffer`` samples around them). The
+pieces go out paced in real time on the Clock it is given, so the same code plays to the
+in-memory bus (tests) and to ROS (scripts/speech_event_driver.py), and a session stored with
+``audio_storage_dir`` can be played back to the node.
 """
 
 import wave
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, List, Tuple, Union
+from typing import Callable, List, Union
 
 import numpy as np
 
+from harness.gate import GateSettings, Piece, SpeechGate
 from speech_event.keyvalue import KeyRule, KeyValueFormat, number
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Clock, Publisher
@@ -70,19 +70,14 @@ def read_wav(path: Union[str, Path], sample_rate: int) -> np.ndarray:
     return np.asarray(np.clip(resample(mono.astype(np.float32), rate, sample_rate), -1.0, 1.0))
 
 
-def speech_chunks(audio: np.ndarray, config: DriverConfig) -> List[Tuple[int, np.ndarray]]:
-    """The chunks the driver publishes, with their index: speech and what is near it."""
-    size = config.chunk_size
-    count = -(-audio.size // size)
-    padded = np.zeros(count * size, dtype=np.float32)
-    padded[: audio.size] = audio
-    chunks = padded.reshape(count, size)
-    loud = np.max(np.abs(chunks), axis=1) >= config.speech_amplitude_threshold
-    reach = -(-config.utterance_time_buffer // size)
-    published = np.zeros(count, dtype=bool)
-    for index in np.flatnonzero(loud):
-        published[max(0, index - reach) : index + reach + 1] = True
-    return [(int(index), chunks[index]) for index in np.flatnonzero(published)]
+def gate_settings(config: DriverConfig) -> GateSettings:
+    return GateSettings(config.chunk_size, config.speech_amplitude_threshold, config.utterance_time_buffer)
+
+
+def speech_pieces(audio: np.ndarray, config: DriverConfig) -> List[Piece]:
+    """What the driver publishes of ``audio``: its speech, with the buffer around it (harness/gate.py)."""
+    gate = SpeechGate(gate_settings(config))
+    return gate.feed(audio) + gate.finish()
 
 
 def _publishing(publisher: Publisher, message: object) -> Callable[[], None]:
@@ -90,11 +85,12 @@ def _publishing(publisher: Publisher, message: object) -> Callable[[], None]:
 
 
 def play(audio: np.ndarray, config: DriverConfig, publisher: Publisher, clock: Clock) -> float:
-    """Schedule the speech chunks on ``clock``, each when it has been 'recorded'; return the end time."""
+    """Schedule each published piece on ``clock`` when its last sample has been 'recorded'; return
+    the end time."""
     start = clock.now()
-    seconds_per_chunk = config.chunk_size / config.sample_rate
-    for index, chunk in speech_chunks(audio, config):
+    for first, piece in speech_pieces(audio, config):
         clock.call_at(
-            start + (index + 1) * seconds_per_chunk, _publishing(publisher, Float32MultiArray(data=chunk))
+            start + (first + piece.size) / config.sample_rate,
+            _publishing(publisher, Float32MultiArray(data=piece)),
         )
-    return start + -(-audio.size // config.chunk_size) * seconds_per_chunk
+    return start + audio.size / config.sample_rate

@@ -4,11 +4,9 @@ from typing import List
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
-from harness.driver import DRIVER_FORMAT, DriverConfig, WavError, play, read_wav, speech_chunks
+from harness.driver import DRIVER_FORMAT, DriverConfig, WavError, play, read_wav
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -43,22 +41,6 @@ def test_a_driver_configuration_for_two_channels_is_refused() -> None:
         str(error.value)
         == "driver.ini:1: key 'channels': value '2' is out of range; allowed: 1 (the node takes mono audio)"
     )
-
-
-@settings(max_examples=50)
-@given(
-    loud=st.lists(st.booleans(), min_size=1, max_size=40),
-    buffer=st.integers(0, 5000),
-)
-def test_published_chunks_are_the_loud_ones_and_those_within_the_buffer(
-    loud: List[bool], buffer: int
-) -> None:
-    config = DriverConfig(chunk_size=1000, utterance_time_buffer=buffer)
-    audio = np.concatenate([np.full(1000, 0.5 if is_loud else 0.01, dtype=np.float32) for is_loud in loud])
-    published = [index for index, _ in speech_chunks(audio, config)]
-    reach = -(-buffer // 1000)
-    loud_at = [i for i, is_loud in enumerate(loud) if is_loud]
-    assert published == [i for i in range(len(loud)) if any(abs(i - j) <= reach for j in loud_at)]
 
 
 def test_a_wav_file_is_read_as_mono_float_at_the_asked_rate(tmp_path: Path) -> None:
@@ -104,8 +86,8 @@ def test_a_recorded_session_played_by_the_driver_is_transcribed_and_silence_is_n
     end = play(read_wav(path, rate), config, sound_detection, clock)
     clock.advance_to(end + 2.0)
     assert published == ["turn on the light", "thank you"]
-    total_chunks = -(-session.size // config.chunk_size)
-    assert 0 < len(blocks) < total_chunks / 2  # the silence was not published
+    sent = sum(message.data.size for message in blocks)  # type: ignore[attr-defined]
+    assert 0 < sent < session.size / 2  # the silence was not published
 
 
 def test_a_full_scale_wav_resampled_stays_within_minus_one_to_one(tmp_path: Path) -> None:
