@@ -345,6 +345,18 @@ class RosLogHandler(logging.Handler):
             rospy.logdebug(text)
 
 
+SERVICE_TIMEOUT = 5.0
+
+
+def call_service(name: str, service: messages.ServiceType, request: object) -> object:
+    """Call a service of ours by name (the GUI's language switch and enable toggle): our request
+    dataclass in, our response dataclass out; rospy's exception when nobody serves it in time."""
+    ros_service = generated_class(service.name, "srv")
+    rospy.wait_for_service(name, timeout=SERVICE_TIMEOUT)
+    answer = rospy.ServiceProxy(name, ros_service)(_as_ros(ros_service._request_class, request))
+    return _from_ros(service.response, answer)
+
+
 def start_ros_node(name: str, verbose: bool) -> None:
     """Register this process with the master and send the node's log records to rosout.
 

@@ -1,0 +1,190 @@
+"""A window on what the robot hears, for presentations (seed D4.3.2, section 7.4).
+
+Each text published on /speechEvent/text is shown with its time, in a font readable across a
+room, errors in red, newest at the bottom and kept in view. A status line says what the node is
+doing: from its /diagnostics (disabled, soundDetection down, transcribing) and from the audio on
+/soundDetection/signal (hearing speech). A text box publishes a typed line on /speechEvent/text
+as if it had been recognised (demos without a microphone); a language switch and an
+enable/disable toggle call the node's services where it offers them.
+
+It talks only through the project's ports (Transport, and a service caller), so it runs on the
+in-memory bus and on ROS alike. Transport callbacks come on other threads (rospy's); they queue
+what they saw and the Tk main loop takes it from the queue.
+"""
+
+import argparse
+import queue
+import time
+import tkinter as tk
+from typing import Callable, List, Optional, Tuple
+
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.diagnostics import DIAGNOSTICS_TOPIC
+from speech_event.messages import (
+    SET_ENABLED,
+    SET_LANGUAGE,
+    DiagnosticArray,
+    DiagnosticStatus,
+    Float32MultiArray,
+    ServiceType,
+    SetEnabledRequest,
+    SetLanguageRequest,
+    String,
+)
+from speech_event.ports import Transport
+
+# (service name, its type, request) -> response; raises when the service is not there.
+ServiceCall = Callable[[str, ServiceType, object], object]
+
+ERROR_COLOUR = "#c62828"
+TEXT_COLOUR = "#111111"
+POLL_MS = 50
+HEARING_SECONDS = 0.5  # "hearing speech" for this long after the last block
+LANGUAGES = ("english", "kinyarwanda")
+
+
+def status_of(diagnostics: Optional[DiagnosticArray]) -> str:
+    """The node's state in a few words, from its last diagnostics."""
+    if diagnostics is None or not diagnostics.status:
+        return "listening"
+    status: DiagnosticStatus = diagnostics.status[0]
+    values = {pair.key: pair.value for pair in status.values}
+    if values.get("enabled") == "false":
+        return "disabled"
+    if status.level == DiagnosticStatus.ERROR:
+        return "soundDetection down"
+    if values.get("utterances waiting for recognition", "0") != "0" or status.level == DiagnosticStatus.WARN:
+        return "transcribing"
+    return "listening"
+
+
+class TranscriptWindow:
+    def __init__(
+        self,
+        root: tk.Tk,
+        transport: Transport,
+        call: ServiceCall,
+        font_size: int = 28,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self.root = root
+        self._call = call
+        self._clock = clock
+        # (what, the message, when it arrived): shown with the time it came, not when Tk got to it
+        self._events: queue.Queue[Tuple[str, object, float]] = queue.Queue()  # novermin
+        self._diagnostics: Optional[DiagnosticArray] = None
+        self._last_block = float("-inf")
+        root.title("Speech Event")
+        font = ("DejaVu Sans", font_size)
+        self.history = tk.Text(root, font=font, wrap="word", height=8, width=40, state="disabled")
+        self.history.tag_configure("error", foreground=ERROR_COLOUR)
+        self.history.tag_configure("text", foreground=TEXT_COLOUR)
+        self.history.pack(fill="both", expand=True)
+        self.status = tk.Label(root, font=("DejaVu Sans", max(10, font_size // 2)), anchor="w")
+        self.status.pack(fill="x")
+        controls = tk.Frame(root)
+        controls.pack(fill="x")
+        self.entry = tk.Entry(controls, font=("DejaVu Sans", max(10, font_size // 2)))
+        self.entry.pack(side="left", fill="x", expand=True)
+        self.entry.bind("<Return>", lambda _event: self.publish_typed())
+        tk.Button(controls, text="Publish", command=self.publish_typed).pack(side="left")
+        self.language = tk.StringVar(root, LANGUAGES[0])
+        for language in LANGUAGES:
+            tk.Radiobutton(
+                controls, text=language, value=language, variable=self.language, command=self.switch_language
+            ).pack(side="left")
+        self.enabled = tk.BooleanVar(root, True)
+        tk.Checkbutton(controls, text="enabled", variable=self.enabled, command=self.toggle_enabled).pack(
+            side="left"
+        )
+        self._publisher = transport.advertise(TEXT_TOPIC, String)
+        transport.subscribe(TEXT_TOPIC, String, lambda message: self._arrived("text", message))
+        transport.subscribe(
+            DIAGNOSTICS_TOPIC, DiagnosticArray, lambda message: self._arrived("diagnostics", message)
+        )
+        transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, lambda message: self._arrived("block", message))
+        self.refresh()
+
+    # -- what arrives ------------------------------------------------------------------------------
+
+    def _arrived(self, kind: str, message: object) -> None:
+        self._events.put((kind, message, self._clock()))
+
+    def refresh(self) -> None:
+        """Show what the transport delivered since the last call, and the status now."""
+        while True:
+            try:
+                kind, message, when = self._events.get_nowait()
+            except queue.Empty:
+                break
+            if kind == "text":
+                self._show(str(getattr(message, "data", "")), when)
+            elif kind == "diagnostics" and isinstance(message, DiagnosticArray):
+                self._diagnostics = message
+            elif kind == "block":
+                self._last_block = when
+        status = status_of(self._diagnostics)
+        if status == "listening" and self._clock() - self._last_block < HEARING_SECONDS:
+            status = "hearing speech"
+        self.status.configure(text=status)
+
+    def poll(self) -> None:
+        self.refresh()
+        self.root.after(POLL_MS, self.poll)
+
+    def _show(self, text: str, when: float) -> None:
+        stamp = time.strftime("%H:%M:%S", time.localtime(when))
+        self.history.configure(state="normal")
+        self.history.insert("end", f"{stamp}  {text}\n", "error" if text.startswith("Error:") else "text")
+        self.history.configure(state="disabled")
+        self.history.see("end")
+
+    def lines(self) -> List[str]:
+        return self.history.get("1.0", "end").splitlines()[:-1]
+
+    # -- what the presenter does -------------------------------------------------------------------
+
+    def publish_typed(self) -> None:
+        line = self.entry.get().strip()
+        if line:
+            self._publisher.publish(String(data=line))
+            self.entry.delete(0, "end")
+
+    def switch_language(self) -> None:
+        self._ask(SET_LANGUAGE_SERVICE, SET_LANGUAGE, SetLanguageRequest(language=self.language.get()))
+
+    def toggle_enabled(self) -> None:
+        self._ask(SET_ENABLED_SERVICE, SET_ENABLED, SetEnabledRequest(status=str(self.enabled.get()).lower()))
+
+    def _ask(self, name: str, service: ServiceType, request: object) -> None:
+        try:
+            response = self._call(name, service, request)
+        except Exception as problem:  # the node offers no such service, or it is gone
+            self._show(f"Error: {name} did not answer: {problem}", self._clock())
+            return
+        if getattr(response, "response", 0) != 1:
+            self._show(f"Error: {name} refused {request}", self._clock())
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """The window on ROS: ``python3 -m speech_event.gui`` / scripts/speech_event_gui.py."""
+    parser = argparse.ArgumentParser(prog="speech_event_gui", description=__doc__)
+    parser.add_argument(
+        "--font-size", type=int, default=28, help="points (default 28: readable across a room)"
+    )
+    arguments = parser.parse_args(argv)
+    import rospy
+
+    from speech_event.adapters.ros import RosTransport, call_service
+
+    rospy.init_node("speechEventGui", anonymous=True)
+    root = tk.Tk()
+    window = TranscriptWindow(root, RosTransport(), call_service, arguments.font_size)
+    window.poll()
+    root.mainloop()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
