@@ -5,9 +5,10 @@ import dataclasses
 import logging
 import signal
 import sys
+import time
 from contextlib import ExitStack
 from pathlib import Path
-from typing import Callable, List, Optional
+from typing import TYPE_CHECKING, Callable, List, Optional
 
 from harness.catalog import RECOGNIZERS, VOICES
 from harness.memory_runner import run_in_memory
@@ -15,8 +16,13 @@ from harness.outcome import Outcome
 from harness.replay_storage import replay_storage
 from harness.report import passed, report
 from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
+from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.asr.errors import ModelError
 from speech_event.config import ConfigError, SpeechEventConfig, load_config
+
+if TYPE_CHECKING:  # tkinter only when a window is asked for
+    from speech_event.gui import TranscriptWindow
 
 # The robot's command phrases: package data, so the demo runs from any folder after pip install.
 COMMANDS = Path(__file__).resolve().parent / "data" / "robot_commands.txt"
@@ -103,9 +109,37 @@ def _demo(arguments: argparse.Namespace) -> int:
         f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)\n"
         f"speechEvent transcribes with {scenario.recognizer}{mode}"
     )
+    if arguments.gui:
+        return _demo_in_a_window(scenario)
     published = run_in_memory(scenario).published
     for message in published:
         print(f"/speechEvent/text at t={message.time:.3f} s: {message.text!r}")
+    return 0
+
+
+def open_demo_window(scenario: Scenario) -> "TranscriptWindow":
+    """The presentation window on the demo's in-memory bus, after the demo ran (on its fake clock)."""
+    import tkinter
+
+    from speech_event.gui import TranscriptWindow
+
+    bus, clock, started = InMemoryBus(), FakeClock(), time.time()
+
+    def time_of_day() -> float:  # the window shows the time of day; the scenario starts at 0
+        return started + clock.now()
+
+    window = TranscriptWindow(
+        tkinter.Tk(), bus, lambda name, _, request: bus.call(name, request), clock=time_of_day
+    )
+    run_in_memory(scenario, bus=bus, clock=clock)
+    window.refresh()
+    return window
+
+
+def _demo_in_a_window(scenario: Scenario) -> int:
+    window = open_demo_window(scenario)
+    window.poll()
+    window.root.mainloop()
     return 0
 
 
@@ -144,6 +178,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         help="command grammar for pocketsphinx when the config sets none (default: the robot's commands); "
         "'' for its language model",
     )
+    demo.add_argument("--gui", action="store_true", help="show the text in the presentation window (Tk)")
     demo.set_defaults(handler=_demo)
     storage = commands.add_parser(
         "replay-storage",

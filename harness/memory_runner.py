@@ -1,5 +1,7 @@
 """Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic."""
 
+from typing import Optional
+
 from harness.catalog import engine_builder_for, recognizer_for
 from harness.outcome import Outcome, Published, result_text
 from harness.scenario import Scenario
@@ -15,15 +17,21 @@ from speech_event.node import SpeechEventNode
 SOUND_DETECTION = "soundDetection"
 
 
-def run_in_memory(scenario: Scenario, recognition_seconds: float = 0.0) -> Outcome:
+def run_in_memory(
+    scenario: Scenario,
+    recognition_seconds: float = 0.0,
+    bus: Optional[InMemoryBus] = None,
+    clock: Optional[FakeClock] = None,
+) -> Outcome:
     """Every message the node published on /speechEvent/text, with its scenario time, every service
     response and every action result.
 
-    ``recognition_seconds`` is how much scenario time each recognition takes.
+    ``recognition_seconds`` is how much scenario time each recognition takes. ``bus`` and ``clock``:
+    ones that others watch too (the demo's window).
     """
     timeline = build_timeline(scenario)
-    clock = FakeClock()
-    bus = InMemoryBus()
+    clock = clock or FakeClock()
+    bus = bus or InMemoryBus()
     outcome = Outcome()
     played = 0
     bus.subscribe(

@@ -19,6 +19,7 @@ import tkinter as tk
 from typing import Callable, List, Optional, Tuple
 
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.application import without_remappings
 from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.diagnostics import DIAGNOSTICS_TOPIC
 from speech_event.messages import (
@@ -98,7 +99,7 @@ class TranscriptWindow:
         tk.Checkbutton(controls, text="enabled", variable=self.enabled, command=self.toggle_enabled).pack(
             side="left"
         )
-        self._publisher = transport.advertise(TEXT_TOPIC, String)
+        self.publisher = transport.advertise(TEXT_TOPIC, String)
         transport.subscribe(TEXT_TOPIC, String, lambda message: self._arrived("text", message))
         transport.subscribe(
             DIAGNOSTICS_TOPIC, DiagnosticArray, lambda message: self._arrived("diagnostics", message)
@@ -148,7 +149,7 @@ class TranscriptWindow:
     def publish_typed(self) -> None:
         line = self.entry.get().strip()
         if line:
-            self._publisher.publish(String(data=line))
+            self.publisher.publish(String(data=line))
             self.entry.delete(0, "end")
 
     def switch_language(self) -> None:
@@ -173,7 +174,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument(
         "--font-size", type=int, default=28, help="points (default 28: readable across a room)"
     )
-    arguments = parser.parse_args(argv)
+    arguments = parser.parse_args(without_remappings(argv))  # roslaunch adds __name:= and __log:=
     import rospy
 
     from speech_event.adapters.ros import RosTransport, call_service

@@ -161,6 +161,7 @@ class RosTransport:
         health check period, so every check ends in time)."""
         self._timeout = master_timeout
         self._subscribers: Dict[str, rospy.Subscriber] = {}
+        self._publishers: List[RosPublisher] = []
         self._services: Dict[str, rospy.Service] = {}
         self._action_servers: Dict[str, actionlib.ActionServer] = {}
         # Goals by id: actionlib hands the cancel callback a new handle object for the same goal.
@@ -171,7 +172,18 @@ class RosTransport:
     def advertise(self, topic: str, message_type: type) -> RosPublisher:
         ros_type = _ROS_TYPES.get(message_type, message_type)
         queue = AUDIO_QUEUE_SIZE if ros_type is std_msgs.Float32MultiArray else TEXT_QUEUE_SIZE
-        return RosPublisher(rospy.Publisher(topic, ros_type, queue_size=queue))
+        publisher = RosPublisher(rospy.Publisher(topic, ros_type, queue_size=queue))
+        self._publishers.append(publisher)
+        return publisher
+
+    def close(self) -> None:
+        """Unregister the topics this transport advertised and subscribed to (a window closed in a
+        process that goes on; a node's process unregisters everything as it ends anyway)."""
+        for publisher in self._publishers:
+            publisher.unregister()
+        for subscriber in self._subscribers.values():
+            subscriber.unregister()
+        self._publishers, self._subscribers = [], {}
 
     def subscribe(self, topic: str, message_type: type, callback: Callable[[object], None]) -> None:
         ros_type = _ROS_TYPES.get(message_type, message_type)

@@ -2,6 +2,7 @@
 failure, never a skip (tests/ros/ensure_ros_packages.sh installs it)."""
 
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -69,3 +70,30 @@ def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]
     finally:
         rospy.signal_shutdown("tests done")
         processes.stop_all()
+
+
+# One X server for the session: Tk keeps its connection to a display after its window is gone, and
+# loses the whole process when that server stops.
+@pytest.fixture(scope="session")
+def display() -> Iterator[str]:
+    number = next(n for n in range(90, 200) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    server = subprocess.Popen(
+        ["Xvfb", f":{number}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 20
+        while not Path(f"/tmp/.X11-unix/X{number}").exists():
+            assert server.poll() is None and time.monotonic() < deadline, "Xvfb did not start"
+            time.sleep(0.05)
+        old = os.environ.get("DISPLAY")
+        os.environ["DISPLAY"] = f":{number}"
+        yield f":{number}"
+        if old is None:
+            del os.environ["DISPLAY"]
+        else:
+            os.environ["DISPLAY"] = old
+    finally:
+        server.terminate()
+        server.wait(10)

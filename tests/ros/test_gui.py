@@ -5,19 +5,20 @@ In the ros env: Debian's /usr/bin/python3 has Tk (python3-tk), and .ci/run insta
 imagemagick (its ``import`` takes the screenshot) with the ROS packages.
 """
 
-import os
 import subprocess
 import sys
 import time
 import tkinter as tk
 from pathlib import Path
-from typing import Dict, Iterator, List
+from typing import Dict, List
 
 import numpy as np
 import pytest
 
 from fixtures.audio import speak_tones
+from harness.cli import open_demo_window
 from harness.ros_runner import Processes
+from harness.scenario import Say, Scenario
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -32,33 +33,6 @@ from tests.application import APPLICATION
 from tests.ros.conftest import wait_for
 
 NOON = 12 * 3600.0
-
-
-# One X server for the session: Tk keeps its connection to a display after its window is gone, and
-# loses the whole process when that server stops.
-@pytest.fixture(scope="session")
-def display() -> Iterator[str]:
-    number = next(n for n in range(90, 200) if not Path(f"/tmp/.X11-unix/X{n}").exists())
-    server = subprocess.Popen(
-        ["Xvfb", f":{number}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    try:
-        deadline = time.monotonic() + 20
-        while not Path(f"/tmp/.X11-unix/X{number}").exists():
-            assert server.poll() is None and time.monotonic() < deadline, "Xvfb did not start"
-            time.sleep(0.05)
-        old = os.environ.get("DISPLAY")
-        os.environ["DISPLAY"] = f":{number}"
-        yield f":{number}"
-        if old is None:
-            del os.environ["DISPLAY"]
-        else:
-            os.environ["DISPLAY"] = old
-    finally:
-        server.terminate()
-        server.wait(10)
 
 
 def _screenshot(display: str, path: Path) -> np.ndarray:
@@ -140,9 +114,10 @@ def test_on_ros_the_window_shows_the_nodes_texts_and_calls_its_services(
     config.write_text("health_check_period 1.0\n")  # no soundDetection: an error every second
     processes = Processes(roscore, tmp_path)
     root = tk.Tk()
+    transport = RosTransport()
     try:
         processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
-        window = TranscriptWindow(root, RosTransport(), call_service)
+        window = TranscriptWindow(root, transport, call_service)
 
         def shown() -> List[str]:
             window.refresh()
@@ -161,5 +136,26 @@ def test_on_ros_the_window_shows_the_nodes_texts_and_calls_its_services(
         # the services answered 1: the window shows no refusal
         assert [line for line in shown() if "refused" in line or "did not answer" in line] == []
     finally:
+        transport.close()  # later tests count the publishers of /speechEvent/text
         root.destroy()
         processes.stop_all()
+
+
+def test_the_demo_opens_the_window_on_its_in_memory_bus(display: str) -> None:
+    scenario = Scenario(
+        name="demo",
+        source="demo",
+        config=SpeechEventConfig(),
+        steps=(Say("go to the kitchen"),),
+        expected=("go to the kitchen",),
+        voice="tones",
+        recognizer="fake",
+    )
+    window = open_demo_window(scenario)
+    try:
+        window.root.update()
+        (line,) = window.lines()
+        assert line.endswith("  go to the kitchen")
+        assert window.history.tag_names("1.0") == ("text",)
+    finally:
+        window.root.destroy()
