@@ -1,41 +1,212 @@
-"""``speech_event_driver.py -c config/speech_event_driver.ini FILE.wav``: the driver as a ROS node."""
+"""``speech-event-driver -c config/speech_event_driver.ini [SOURCE]``: soundDetection from a laptop.
+
+It publishes mono float32 blocks on /soundDetection/signal as the robot's soundDetection does, only
+while its gate hears speech (harness/gate.py), from one of three sources:
+
+- the microphone (``mode mic``, no SOURCE): any PortAudio input device (harness/microphone.py);
+- an audio file (SOURCE: WAV, FLAC, OGG, ...), played on the wall clock;
+- a scenario file (SOURCE ending in .toml): its speech, silences and outages on the wall clock.
+
+On ROS (the default) it is the node ``soundDetection``; with ``--transport memory`` it runs Speech
+Event itself on the in-memory bus in the same process and prints what it publishes: no roscore.
+"""
 
 import argparse
 import sys
+import threading
 import time
-from typing import List, Optional
+from contextlib import ExitStack
+from typing import Any, Callable, List, Optional, Tuple
 
-from harness.driver import DRIVER_FORMAT, WavError, play, read_wav
-from speech_event import SIGNAL_TOPIC
+from harness.driver import DRIVER_FORMAT, AudioFileError, DriverConfig, gate_settings, play, read_audio
+from harness.gate import Piece, SpeechGate
+from harness.microphone import Microphone, MicrophoneError, describe_devices, input_devices, load_sounddevice
+from harness.scenario import ScenarioError, load_scenario
+from harness.timeline import ComeUp, GoDown, Publish, build_timeline
+from harness.vad_gate import VadGate
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import without_remappings
+from speech_event.asr.errors import ModelError
+from speech_event.config import SpeechEventConfig, load_config
 from speech_event.keyvalue import ConfigError
 from speech_event.messages import Float32MultiArray
+from speech_event.ports import Clock, Publisher
 
 SUBSCRIBER_TIMEOUT = 30.0
+USAGE_ERROR = 2
 
 
-def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(prog="speech_event_driver")
-    parser.add_argument("-c", "--config", required=True, help="driver configuration (Table 2 keys)")
-    parser.add_argument("wav", help="the audio to publish, a PCM WAV file")
-    arguments = parser.parse_args(without_remappings(argv))
-    try:
-        config = DRIVER_FORMAT.load(arguments.config)
-        audio = read_wav(arguments.wav, config.sample_rate)
-    except (ConfigError, WavError) as problem:
-        print(f"error: {problem}", file=sys.stderr)
-        return 2
+def _say(line: str) -> None:
+    print(f"speech_event_driver: {line}", file=sys.stderr, flush=True)
+
+
+class Link:
+    """soundDetection's presence on the topic: up (a publisher), or down (none)."""
+
+    def __init__(self, advertise: Callable[[], Any], wait_for_subscriber: Callable[[Any], None]) -> None:
+        self._advertise = advertise
+        self._wait = wait_for_subscriber
+        self.publisher: Optional[Any] = None
+
+    def up(self) -> Publisher:
+        publisher: Publisher = self._advertise()
+        self._wait(publisher)  # messages sent before a subscriber connects are lost
+        self.publisher = publisher
+        return publisher
+
+    def down(self, crash: bool) -> None:
+        if self.publisher is not None:
+            # The in-memory bus can crash a publisher (a stale registration); rospy only unregisters.
+            stop = (
+                getattr(self.publisher, "crash" if crash else "shutdown", None) or self.publisher.unregister
+            )
+            stop()
+            self.publisher = None
+
+
+def _ros() -> Tuple[Link, Clock, Callable[[], bool]]:
     import rospy
 
     from speech_event.adapters.ros import RosClock, RosTransport
 
     rospy.init_node("soundDetection")
-    publisher = RosTransport().advertise(SIGNAL_TOPIC, Float32MultiArray)
-    deadline = time.monotonic() + SUBSCRIBER_TIMEOUT
-    while publisher.connections() == 0 and time.monotonic() < deadline:  # earlier messages are lost
-        time.sleep(0.01)
-    clock = RosClock()
-    end = play(audio, config, publisher, clock)
-    while not rospy.is_shutdown() and clock.now() < end + 0.5:
+    transport = RosTransport()
+
+    def wait(publisher: Any) -> None:
+        deadline = time.monotonic() + SUBSCRIBER_TIMEOUT
+        while publisher.connections() == 0 and time.monotonic() < deadline and not rospy.is_shutdown():
+            time.sleep(0.01)
+
+    return (
+        Link(lambda: transport.advertise(SIGNAL_TOPIC, Float32MultiArray), wait),
+        RosClock(),
+        rospy.is_shutdown,
+    )
+
+
+def _memory(
+    stack: ExitStack, node_config: SpeechEventConfig, recognizer_name: str
+) -> Tuple[Link, Clock, Callable[[], bool]]:
+    """Speech Event itself on the in-memory bus, on the wall clock; its texts printed."""
+    from harness.catalog import engine_builder_for, recognizer_for
+    from speech_event.adapters.executors import ThreadExecutor
+    from speech_event.adapters.memory_bus import InMemoryBus
+    from speech_event.adapters.system_clock import SystemClock
+    from speech_event.messages import String
+    from speech_event.node import SpeechEventNode
+
+    bus, clock, executor = InMemoryBus(), SystemClock(), ThreadExecutor()
+    bus.subscribe(TEXT_TOPIC, String, lambda m: print(f"{TEXT_TOPIC}: {m.data!r}", flush=True))  # type: ignore[attr-defined]
+    node = SpeechEventNode(
+        node_config,
+        bus,
+        clock,
+        recognizer_for(recognizer_name, node_config),
+        executor,
+        engine_builder_for(recognizer_name, node_config),
+    )
+    node.start()
+
+    def finish() -> None:  # what was said last is transcribed before the process ends
+        time.sleep(node_config.speech_pause_period + 0.2)
+        node.stop()
+        executor.shutdown(60.0)
+
+    stack.callback(finish)
+    advertise = lambda: bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")  # noqa: E731
+    return Link(advertise, lambda publisher: None), clock, lambda: False
+
+
+def _gate(config: DriverConfig) -> SpeechGate:
+    check = VadGate.from_config(config) if config.vad_threshold > 0 else None
+    return SpeechGate(gate_settings(config), check)
+
+
+def _publish(publisher: Publisher, pieces: List[Piece]) -> None:
+    for _, piece in pieces:
+        publisher.publish(Float32MultiArray(data=piece))
+
+
+def _wait_until(clock: Clock, end: float, stopped: Callable[[], bool]) -> None:
+    while clock.now() < end and not stopped():
         time.sleep(0.05)
+
+
+def _play_file(
+    path: str, config: DriverConfig, link: Link, clock: Clock, stopped: Callable[[], bool]
+) -> None:
+    audio = read_audio(path, config.sample_rate)
+    _wait_until(clock, play(audio, config, link.up(), clock, _gate(config)) + 0.1, stopped)
+
+
+def _play_scenario(
+    path: str, config: DriverConfig, link: Link, clock: Clock, stopped: Callable[[], bool]
+) -> None:
+    """The scenario's soundDetection events at their times from now (messages of another type, sent
+    by another node in a scenario, are left out: this driver is soundDetection)."""
+    timeline = build_timeline(load_scenario(path, SpeechEventConfig(sample_rate=config.sample_rate)))
+    publisher = link.up()
+    start = clock.now()
+    for event in timeline.events:
+        _wait_until(clock, start + event.time, stopped)
+        if isinstance(event, Publish) and isinstance(event.message, Float32MultiArray):
+            publisher.publish(event.message)
+        elif isinstance(event, GoDown):
+            link.down(crash=event.kind == "crash")
+        elif isinstance(event, ComeUp):
+            publisher = link.up()
+    _wait_until(clock, start + timeline.end, stopped)
+
+
+def _listen(config: DriverConfig, link: Link, stopped: Callable[[], bool]) -> None:
+    publisher, gate = link.up(), _gate(config)
+    stop = threading.Event()
+    microphone = Microphone(
+        config, lambda audio: _publish(publisher, gate.feed(audio)), _say, load_sounddevice()
+    )
+    capture = threading.Thread(target=microphone.run, args=(stop,), name="microphone", daemon=True)
+    capture.start()
+    try:
+        while capture.is_alive() and not stopped():
+            time.sleep(0.1)
+    finally:
+        stop.set()
+        capture.join(5.0)
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = argparse.ArgumentParser(prog="speech_event_driver", description=__doc__)
+    parser.add_argument(
+        "-c", "--config", required=True, help="driver configuration (the seed's Table 2 keys)"
+    )
+    parser.add_argument("source", nargs="?", help="an audio file or a scenario (.toml); none: the microphone")
+    parser.add_argument("--transport", choices=["ros", "memory"], default="ros")
+    parser.add_argument("--node-config", help="memory: Speech Event's configuration (default: its defaults)")
+    parser.add_argument("--recognizer", default="auto", help="memory: Speech Event's engine (default auto)")
+    parser.add_argument("--list-devices", action="store_true", help="print the input devices and exit")
+    arguments = parser.parse_args(without_remappings(argv))
+    try:
+        config = DRIVER_FORMAT.load(arguments.config)
+        if arguments.list_devices:
+            print(describe_devices(input_devices(load_sounddevice())))
+            return 0
+        if config.mode == "file" and not arguments.source:
+            raise ConfigError(f"{arguments.config}: mode file needs a SOURCE file on the command line")
+        node_config = load_config(arguments.node_config) if arguments.node_config else SpeechEventConfig()
+        with ExitStack() as stack:
+            if arguments.transport == "memory":
+                link, clock, stopped = _memory(stack, node_config, arguments.recognizer)
+            else:
+                link, clock, stopped = _ros()
+            if arguments.source is None:
+                _listen(config, link, stopped)
+            elif arguments.source.endswith(".toml"):
+                _play_scenario(arguments.source, config, link, clock, stopped)
+            else:
+                _play_file(arguments.source, config, link, clock, stopped)
+    except (ConfigError, AudioFileError, ScenarioError, MicrophoneError, ModelError) as problem:
+        _say(f"error: {problem}")
+        return USAGE_ERROR
+    except KeyboardInterrupt:
+        return 130
     return 0

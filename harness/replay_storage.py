@@ -13,7 +13,7 @@ from typing import Dict, List
 import numpy as np
 
 from harness.catalog import recognizer_for
-from harness.driver import read_wav
+from harness.driver import read_audio
 from harness.scenario import ScenarioError
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -62,7 +62,7 @@ def replay_storage(directory: str, recognizer_name: str, base: SpeechEventConfig
         language_config = dataclasses.replace(config, language=line.language)
         if line.language not in recognizers:
             recognizers[line.language] = recognizer_for(recognizer_name, language_config)
-        audio = read_wav(folder / line.file, STORED_RATE)
+        audio = read_audio(folder / line.file, STORED_RATE)
         now = published_for(audio, language_config, recognizers[line.language])
         then = [line.published] if line.published is not None else []
         verdict = "same" if now == then else "changed"

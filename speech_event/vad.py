@@ -9,7 +9,7 @@ and the recurrent state carried from one window to the next.
 
 import importlib.util
 from pathlib import Path
-from typing import Callable, List
+from typing import Callable, List, Tuple
 
 import numpy as np
 
@@ -51,18 +51,29 @@ class SileroVad:
         except Exception as problem:  # onnxruntime raises its own exception types
             raise ModelError(f"{path}: onnxruntime cannot load Silero VAD: {problem}") from None
 
+    @staticmethod
+    def initial_state() -> np.ndarray:
+        return np.zeros(_STATE_SHAPE, dtype=np.float32)
+
+    def window_probability(
+        self, context: np.ndarray, window: np.ndarray, state: np.ndarray
+    ) -> Tuple[float, np.ndarray]:
+        """One 512-sample window with the 64 samples before it: its speech probability, the next state."""
+        framed = np.concatenate([context, window])[None, :]
+        rate = np.array(SAMPLE_RATE, dtype=np.int64)
+        probability, state = self._session.run(None, {"input": framed, "state": state, "sr": rate})
+        return float(probability[0, 0]), state
+
     def speech_probabilities(self, audio: np.ndarray) -> np.ndarray:
         """The speech probability of each 512-sample window of 16 kHz ``audio``."""
-        state = np.zeros(_STATE_SHAPE, dtype=np.float32)
+        state = self.initial_state()
         context = np.zeros(CONTEXT, dtype=np.float32)
-        rate = np.array(SAMPLE_RATE, dtype=np.int64)
         samples = np.asarray(audio, dtype=np.float32)
         probabilities: List[float] = []
         for start in range(0, samples.size - WINDOW + 1, WINDOW):
             window = samples[start : start + WINDOW]
-            framed = np.concatenate([context, window])[None, :]
-            probability, state = self._session.run(None, {"input": framed, "state": state, "sr": rate})
-            probabilities.append(float(probability[0, 0]))
+            probability, state = self.window_probability(context, window, state)
+            probabilities.append(probability)
             context = window[-CONTEXT:]
         return np.array(probabilities)
 

@@ -1,3 +1,6 @@
+import os
+import subprocess
+import sys
 import wave
 from pathlib import Path
 from typing import List
@@ -6,7 +9,7 @@ import numpy as np
 import pytest
 
 from fixtures.audio import noise, speak_tones
-from harness.driver import DRIVER_FORMAT, DriverConfig, WavError, play, read_wav
+from harness.driver import DRIVER_FORMAT, AudioFileError, DriverConfig, play, read_audio
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -34,12 +37,26 @@ def test_the_shipped_configurations_read_as_intended() -> None:
     assert load_config(ROOT / "config" / "speech_event_tests.ini") == SpeechEventConfig(verbose_mode=True)
 
 
-def test_a_driver_configuration_for_two_channels_is_refused() -> None:
+def test_the_robots_spellings_and_mode_are_read() -> None:
+    config = DRIVER_FORMAT.parse(
+        "chunkSize 512\nsampleRate 16000\nspeechAmplitudeThreshold 0.2\nutteranceTimeBuffer 800\nmode FILE\n",
+        "driver.ini",
+    )
+    assert config == DriverConfig(
+        chunk_size=512,
+        sample_rate=16000,
+        speech_amplitude_threshold=0.2,
+        utterance_time_buffer=800,
+        mode="file",
+    )
+
+
+def test_a_driver_configuration_with_an_unknown_mode_says_what_is_allowed() -> None:
     with pytest.raises(ConfigError) as error:
-        DRIVER_FORMAT.parse("channels 2\n", "driver.ini")
+        DRIVER_FORMAT.parse("mode speaker\n", "driver.ini")
     assert (
         str(error.value)
-        == "driver.ini:1: key 'channels': value '2' is out of range; allowed: 1 (the node takes mono audio)"
+        == "driver.ini:1: key 'mode': value 'speaker' is not one of the choices; allowed: mic or file"
     )
 
 
@@ -49,18 +66,26 @@ def test_a_wav_file_is_read_as_mono_float_at_the_asked_rate(tmp_path: Path) -> N
     stereo = np.stack([left, left * 0.0], axis=1)
     path = tmp_path / "stereo.wav"
     _write_wav(path, stereo, 16000)
-    audio = read_wav(path, 48000)
+    audio = read_audio(path, 48000)
     assert audio.dtype == np.float32
     assert audio.size == 48000
     assert float(np.max(np.abs(audio))) == pytest.approx(0.25, abs=0.01)  # the two channels averaged
 
 
 def test_a_file_that_is_not_wav_is_named_with_the_problem(tmp_path: Path) -> None:
-    path = tmp_path / "notes.txt"
+    path = tmp_path / "notes.wav"
     path.write_text("not audio")
-    with pytest.raises(WavError) as error:
-        read_wav(path, 48000)
+    with pytest.raises(AudioFileError) as error:
+        read_audio(path, 48000)
     assert str(error.value) == f"{path}: cannot read it as a WAV file: file does not start with RIFF id"
+    other = tmp_path / "notes.txt"
+    other.write_text("not audio")
+    with pytest.raises(AudioFileError) as error:
+        read_audio(other, 48000)
+    assert str(error.value) == (
+        f"{other}: cannot read it as audio (Error opening {str(other)!r}: Format not recognised.); "
+        "allowed: what libsndfile reads (WAV, FLAC, OGG, ...)"
+    )
 
 
 def test_a_recorded_session_played_by_the_driver_is_transcribed_and_silence_is_not_published(
@@ -83,7 +108,7 @@ def test_a_recorded_session_played_by_the_driver_is_transcribed_and_silence_is_n
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     node.start()
     config = DriverConfig(utterance_time_buffer=4800)  # 0.1 s: the two utterances stay apart
-    end = play(read_wav(path, rate), config, sound_detection, clock)
+    end = play(read_audio(path, rate), config, sound_detection, clock)
     clock.advance_to(end + 2.0)
     assert published == ["turn on the light", "thank you"]
     sent = sum(message.data.size for message in blocks)  # type: ignore[attr-defined]
@@ -100,5 +125,68 @@ def test_a_full_scale_wav_resampled_stays_within_minus_one_to_one(tmp_path: Path
         wav.setsampwidth(2)
         wav.setframerate(16000)
         wav.writeframes(square.tobytes())
-    audio = read_wav(path, 48000)
+    audio = read_audio(path, 48000)
     assert float(np.max(np.abs(audio))) == 1.0
+
+
+def _driver_command(*arguments: str) -> "subprocess.CompletedProcess[str]":
+    return subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "speech_event_driver.py"), *arguments],
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_the_driver_plays_a_flac_file_to_the_node_on_the_in_memory_bus(tmp_path: Path) -> None:
+    import soundfile
+
+    rate = 48000
+    session = np.concatenate([np.zeros(rate // 2), speak_tones("open the door", rate), np.zeros(rate // 2)])
+    soundfile.write(str(tmp_path / "session.flac"), session, rate)
+    result = _driver_command(
+        "-c",
+        str(ROOT / "config" / "speech_event_driver.ini"),
+        str(tmp_path / "session.flac"),
+        "--transport",
+        "memory",
+        "--recognizer",
+        "fake",
+    )
+    assert (result.returncode, result.stdout, result.stderr) == (
+        0,
+        "/speechEvent/text: 'open the door'\n",
+        "",
+    )
+
+
+def test_the_driver_plays_a_scenarios_speech_and_outage_on_the_in_memory_bus(tmp_path: Path) -> None:
+    (tmp_path / "node.ini").write_text("health_check_period 1.0\n")
+    result = _driver_command(
+        "-c",
+        str(ROOT / "config" / "speech_event_driver.ini"),
+        "scenarios/outage_then_recovery.toml",
+        "--transport",
+        "memory",
+        "--recognizer",
+        "fake",
+        "--node-config",
+        str(tmp_path / "node.ini"),
+    )
+    lines = result.stdout.splitlines()
+    assert lines[-1] == "/speechEvent/text: 'i am back'", result.stderr
+    assert set(lines[:-1]) == {"/speechEvent/text: 'Error: soundDetection is down'"}
+    assert (
+        2 <= len(lines[:-1]) <= 3
+    )  # checks at 1 and 2 s of the 2.5 s outage (wall clock: one more may fall in)
+
+
+def test_mode_file_without_a_file_is_one_clear_error(tmp_path: Path) -> None:
+    (tmp_path / "driver.ini").write_text("mode file\n")
+    result = _driver_command("-c", str(tmp_path / "driver.ini"), "--transport", "memory")
+    assert (result.returncode, result.stderr) == (
+        2,
+        f"speech_event_driver: error: {tmp_path / 'driver.ini'}: mode file needs a SOURCE file on the command line\n",
+    )

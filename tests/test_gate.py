@@ -6,7 +6,11 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
+from fixtures.audio import noise
+from fixtures.tts import speak_tts
+from harness.driver import DriverConfig, gate_settings
 from harness.gate import GateSettings, Piece, SpeechGate
+from harness.vad_gate import VadGate
 from tests.strategies import split, split_points
 
 THRESHOLD = 0.5
@@ -100,3 +104,24 @@ def test_one_word_is_padded_by_exactly_the_buffer_and_close_words_merge() -> Non
     assert indices_of(gated([audio], settings)).tolist() == list(range(750, 1950))
     audio[10] = 1.0  # at the start: the pre-roll is clipped to the stream
     assert indices_of(gated([audio], settings))[:3].tolist() == [0, 1, 2]
+
+
+def test_with_silero_vad_loud_noise_is_not_speech_and_the_spoken_words_are() -> None:
+    """A noisy room: the amplitude alone opens the gate for noise; with Silero VAD it opens only
+    around the words (a loud chunk must also be speech to the VAD)."""
+    rate = 48000
+    rng = np.random.default_rng(3)
+    loud_noise = noise(2 * rate, -12.0, rng)  # peaks far above the 0.1 threshold
+    words = speak_tts("go to the kitchen", rate)
+    audio = np.concatenate([loud_noise, words, loud_noise]).astype(np.float32)
+    config = DriverConfig(utterance_time_buffer=4800)
+    plain = indices_of(gated([audio], gate_settings(config)))
+    assert plain[0] < rate // 10  # the noise opened the amplitude gate at once
+    vad_gate = SpeechGate(gate_settings(config), VadGate.from_config(DriverConfig(vad_threshold=0.5)))
+    published = indices_of(vad_gate.feed(audio) + vad_gate.finish())
+    speech_start, speech_end = loud_noise.size, loud_noise.size + words.size
+    assert published.size > 0
+    # nothing from the first 1.5 s of noise alone, nothing later than 1.5 s after the words
+    assert published[0] >= int(1.5 * rate) and published[-1] < speech_end + int(1.5 * rate)
+    heard = np.intersect1d(published, np.arange(speech_start, speech_end)).size
+    assert heard > 0.8 * words.size

@@ -3,15 +3,20 @@
 import os
 import signal
 import subprocess
+import sys
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import List
 
+import numpy as np
 import rosgraph
+import soundfile
 
+from fixtures.audio import speak_tones
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from tests.ros.conftest import ROOT, ros_environment, serves, wait_for
+from tests.ros.text_listener import received, write_listener
 
 LAUNCH = ROOT / "launch"
 
@@ -105,6 +110,8 @@ def test_each_node_type_in_the_launch_files_is_exactly_one_executable_in_the_pac
         "speech_event_scenario_node.py",
         "sound_detection_replay.py",
         "speech_event_checker.py",
+        "speech_event_driver.py",
+        "speech_event_gui.py",
     }
     for name in types:
         found = [
@@ -113,3 +120,27 @@ def test_each_node_type_in_the_launch_files_is_exactly_one_executable_in_the_pac
             if ".tox" not in path.parts and ".git" not in path.parts and os.access(path, os.X_OK)
         ]
         assert found == [ROOT / "scripts" / name], name
+
+
+def test_the_driver_launch_runs_driver_node_and_window_with_one_command(display: str, tmp_path: Path) -> None:
+    """As on a presenter's laptop (here a file stands in for the microphone): the driver publishes
+    the file's speech, the node transcribes it, the window shows it."""
+    rate = 48000
+    session = np.concatenate([np.zeros(rate // 2), speak_tones("open the door", rate), np.zeros(rate // 2)])
+    soundfile.write(str(tmp_path / "session.flac"), session, rate)
+    port = free_port()
+    environment = {**ros_environment(port, tmp_path), "DISPLAY": display}
+    processes = Processes(environment, tmp_path)
+    listener = processes.start("listener", [sys.executable, str(write_listener(tmp_path))])
+    launch_arguments = [f"source:={tmp_path / 'session.flac'}", "recognizer:=fake", "gui:=true"]
+    try:
+        processes.start("roslaunch", _roslaunch(port, "speech_event_launch_driver.launch", *launch_arguments))
+        master = rosgraph.Master("/launchTest", master_uri=environment["ROS_MASTER_URI"])
+        wait_for(
+            lambda: [t for _, t in received(processes.log("listener"))] == ["open the door"], "the text", 90
+        )
+        _, subscribers, _ = master.getSystemState()
+        assert [TEXT_TOPIC, ["/listener", "/speechEventGui"]] in [[t, sorted(n)] for t, n in subscribers]
+        assert listener.poll() is None
+    finally:
+        processes.stop_all()
