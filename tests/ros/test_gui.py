@@ -25,8 +25,8 @@ from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.ros import RosTransport, call_service
 from speech_event.config import SpeechEventConfig
-from speech_event.gui import ERROR_COLOUR, TranscriptWindow
-from speech_event.messages import Float32MultiArray, String
+from speech_event.gui import ERROR_COLOUR, TranscriptWindow, status_of
+from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, KeyValue, String
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
 from tests.application import APPLICATION
@@ -159,3 +159,19 @@ def test_the_demo_opens_the_window_on_its_in_memory_bus(display: str) -> None:
         assert window.history.tag_names("1.0") == ("text",)
     finally:
         window.root.destroy()
+
+
+def test_the_status_line_reads_the_nodes_diagnostics() -> None:
+    def diagnostics(level: int, **values: str) -> DiagnosticArray:
+        pairs = tuple(KeyValue(key.replace("_", " "), value) for key, value in values.items())
+        return DiagnosticArray(0.0, (DiagnosticStatus(level, "speechEvent", "", "", pairs),))
+
+    ok, warn, error = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+    assert status_of(None) == "listening"
+    assert status_of(diagnostics(ok, enabled="true", utterances_waiting_for_recognition="0")) == "listening"
+    assert (
+        status_of(diagnostics(ok, enabled="true", utterances_waiting_for_recognition="1")) == "transcribing"
+    )
+    assert status_of(diagnostics(warn, enabled="true")) == "transcribing"
+    assert status_of(diagnostics(error, enabled="true")) == "soundDetection down"
+    assert status_of(diagnostics(error, enabled="false")) == "disabled"
