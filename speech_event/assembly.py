@@ -99,6 +99,12 @@ class UtteranceAssembler:
             self._chunks, self._length = [audio[cut:]], audio.size - cut
         return completed
 
+    def peek(self) -> np.ndarray:
+        """The utterance collected so far, kept (close() gives these same samples if nothing is added)."""
+        audio = self._take_all()
+        self._chunks, self._length = [audio], audio.size
+        return audio
+
     def close(self) -> Optional[np.ndarray]:
         """End the current utterance (a pause was heard); None when nothing was collected."""
         if self._length == 0:

@@ -59,6 +59,15 @@ class SpeechEventConfig:
     max_backlog: float = 120.0
     # A recognition running longer is logged, and cancelled where the engine allows; 0: never.
     recognition_timeout: float = 30.0
+    # Transcribe the utterance so far once no block came for speculation_gap, so its text is
+    # ready when the pause ends (speech_event/speculation.py); texts are the same either way.
+    speculative_recognition: bool = True
+    speculation_gap: float = 0.3
+    # Opt-in early end of turn: publish a complete answer this long after the last block instead
+    # of the whole pause; 0: off. Complete: a grammar's phrase, one of complete_answers, or a
+    # text two speculations in a row agreed on.
+    early_pause: float = 0.0
+    complete_answers: str = "yes,no,yego,oya"
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
@@ -81,6 +90,15 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
         return (
             f"speech_pause_period {config.speech_pause_period} s is not longer than {one_block}: "
             "speech would be cut between blocks"
+        )
+    if config.early_pause and not (
+        config.speculative_recognition
+        and config.speculation_gap <= config.early_pause < config.speech_pause_period
+    ):
+        return (
+            f"early_pause {config.early_pause} s needs speculative_recognition true and must be from "
+            f"speculation_gap ({config.speculation_gap} s) to less than speech_pause_period "
+            f"({config.speech_pause_period} s)"
         )
     if config.min_utterance_length > config.max_utterance_length:
         return (
@@ -128,6 +146,10 @@ _FORMAT = KeyValueFormat(
         "vad_threshold": KeyRule(number(float, 0.0, 1.0), "a speech probability from 0 to 1; 0: no check"),
         "max_backlog": seconds(1.0, 3600.0),
         "recognition_timeout": seconds(0.0, 3600.0),
+        "speculative_recognition": KeyRule(boolean, "true or false"),
+        "speculation_gap": seconds(0.05, 60.0),
+        "early_pause": seconds(0.0, 60.0),
+        "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
     },
     # The robot's v1.1 spellings.
     aliases={

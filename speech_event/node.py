@@ -10,6 +10,7 @@ speech_screen, transcript_text), and so do the robot's interfaces around them: t
 (control), the recognise_speech action (listen_action) and /diagnostics (diagnostics).
 """
 
+import dataclasses
 import functools
 import logging
 import threading
@@ -52,9 +53,10 @@ from speech_event.ports import (
     Transcript,
     Transport,
 )
-from speech_event.recognition_queue import RecognitionJob, RecognitionQueue
+from speech_event.recognition_queue import RecognitionJob, RecognitionOutcome, RecognitionQueue
 from speech_event.rejections import RejectionLog
 from speech_event.resample import resample
+from speech_event.speculation import Speculation, SpeculationCounts, complete_answers, is_complete
 from speech_event.speech_screen import Discard, SpeechScreen, speech_screen_for
 from speech_event.storage import StoredUtterance, UtteranceStore
 from speech_event.transcript_text import checked_transcript, text_to_publish
@@ -118,6 +120,13 @@ class SpeechEventNode:
         self._last_arrival = 0.0
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
         self._pause_timer: Optional[Timer] = None
+        # Speculative recognition (speech_event/speculation.py): at most one speculation at a time.
+        self._speculation: Optional[Speculation] = None
+        self._gap_timer: Optional[Timer] = None
+        self._last_speculated: Optional[str] = None  # the text of this utterance's last speculation
+        self._ends_early = False  # this utterance's speculation is a complete answer (early_pause)
+        self._answers = complete_answers(config.complete_answers)
+        self.speculations = SpeculationCounts()
         self._utterances = 0
         self._sound_detection = PublisherStatus.CONNECTED  # as the last health check found it
         self._text_publisher: Optional[Publisher] = None
@@ -185,9 +194,11 @@ class SpeechEventNode:
         for periodic in self._periodic:
             periodic.cancel()
         with self._lock:
-            if self._pause_timer is not None:
-                self._pause_timer.cancel()
-                self._pause_timer = None
+            for timer in (self._pause_timer, self._gap_timer):
+                if timer is not None:
+                    timer.cancel()
+            self._pause_timer = self._gap_timer = None
+            self._drop_speculation()
 
     def flush_storage(self) -> None:
         """Wait until every utterance transcribed so far is stored (when storing is on)."""
@@ -216,6 +227,8 @@ class SpeechEventNode:
                 self._rejections.record_clipped(signal.clipped)
             samples = signal.samples
             self._last_arrival = self._clock.now()
+            self._drop_speculation()  # more audio: what it transcribed is not the utterance
+            self._ends_early = False
             if self._assembler.pending_samples == 0:
                 self._collecting_since = self._last_arrival
                 self._action.utterance_started(self._last_arrival)
@@ -227,19 +240,106 @@ class SpeechEventNode:
                 self._pause_timer = self._clock.call_at(
                     self._last_arrival + self._config.speech_pause_period, self._on_pause_timer
                 )
+            if self._config.speculative_recognition and self._gap_timer is None:
+                self._gap_timer = self._clock.call_at(
+                    self._last_arrival + self._config.speculation_gap, self._on_gap_timer
+                )
+
+    def _pause(self) -> float:
+        """The pause that ends the utterance being collected (shorter for a complete answer)."""
+        return self._config.early_pause if self._ends_early else self._config.speech_pause_period
 
     def _on_pause_timer(self) -> None:
         # One timer per utterance rather than one per block: when it fires early (more blocks came
         # since it was set) it is set again for the pause after the latest block.
         with self._lock:
             self._pause_timer = None
-            due = self._last_arrival + self._config.speech_pause_period
+            due = self._last_arrival + self._pause()
             if self._clock.now() < due - TIMER_TOLERANCE:
                 self._pause_timer = self._clock.call_at(due, self._on_pause_timer)
                 return
+            self._last_speculated, self._ends_early = None, False
             utterance = self._assembler.close()
             if utterance is not None:
                 self._submit(utterance, more_follows=False)
+
+    # -- speculative recognition (speech_event/speculation.py) ------------------------------------
+
+    def _on_gap_timer(self) -> None:
+        with self._lock:
+            self._gap_timer = None
+            due = self._last_arrival + self._config.speculation_gap
+            if self._clock.now() < due - TIMER_TOLERANCE:
+                self._gap_timer = self._clock.call_at(due, self._on_gap_timer)
+                return
+            self._maybe_speculate()
+
+    def _maybe_speculate(self) -> None:
+        """Under the lock: speculate on the utterance being collected if its gap has passed, the
+        worker is idle (closed utterances first) and nothing is speculated on yet."""
+        wanted = (
+            self._config.speculative_recognition and self._enabled and self._assembler.pending_samples > 0
+        )
+        idle = self._running is None and self._queue.waiting == 0 and self._speculation is None
+        gap = self._last_arrival + self._config.speculation_gap
+        if not (wanted and idle and self._gap_timer is None and self._clock.now() >= gap - TIMER_TOLERANCE):
+            return
+        audio = self._assembler.peek()
+        speculation = Speculation(audio.size, self._recognizer)
+        self._speculation = speculation
+        self.speculations.started += 1
+        speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
+
+    def _speculate(self, speculation: Speculation, audio: np.ndarray) -> None:
+        """An executor job: transcribe the utterance so far; publish it only if it closed as it is."""
+        with self._lock:
+            if speculation.cancelled:
+                return
+            speculation.running = True
+        outcome = self._recognize(audio, speculation.recognizer)
+        with self._lock:
+            speculation.running = False
+            if speculation.watchdog is not None:
+                speculation.watchdog.cancel()
+            if speculation.cancelled:
+                self.speculations.wasted_seconds += outcome.took
+                return
+            speculation.outcome = outcome
+            job = speculation.adopted
+            if job is None:  # the pause has not ended: maybe the turn may end early
+                self._note_speculated(speculation, outcome)
+                return
+            self._speculation = None
+            self.speculations.used += 1
+        self._conclude(job, outcome)
+
+    def _note_speculated(self, speculation: Speculation, outcome: RecognitionOutcome) -> None:
+        """Under the lock: a complete answer ends the turn after early_pause, not the whole pause."""
+        text = getattr(outcome.answer, "text", "")
+        grammar_mode = bool(getattr(speculation.recognizer, "whole_phrases", False))
+        complete = isinstance(text, str) and is_complete(
+            text, self._last_speculated, grammar_mode, self._answers
+        )
+        self._last_speculated = text
+        if not (complete and self._config.early_pause > 0):
+            return
+        self._ends_early = True
+        if self._pause_timer is not None:
+            self._pause_timer.cancel()
+        self._pause_timer = self._clock.call_at(
+            max(self._clock.now(), self._last_arrival + self._config.early_pause), self._on_pause_timer
+        )
+
+    def _drop_speculation(self) -> None:
+        """Under the lock: the speculation being collected for is worthless now (not one that a
+        closed utterance adopted: that one is its recognition)."""
+        speculation = self._speculation
+        if speculation is None or speculation.adopted is not None:
+            return
+        self._speculation = None
+        speculation.cancel()
+        if speculation.outcome is not None:
+            self.speculations.wasted_seconds += speculation.outcome.took
 
     def _submit(self, audio: np.ndarray, more_follows: bool) -> None:
         """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
@@ -251,29 +351,36 @@ class SpeechEventNode:
         seconds = audio.size / self._config.sample_rate
         self._statistics.queued(seconds)
         self._action.utterance_closed(number, started_at, more_follows)
-        for dropped in self._queue.put(
-            RecognitionJob(number, started_at, closed_at, audio, recognizer, self._language, seconds)
-        ):
+        job = RecognitionJob(number, started_at, closed_at, audio, recognizer, self._language, seconds)
+        speculation = self._speculation
+        if speculation is not None and speculation.adopted is None:
+            if not speculation.is_for(audio.size, recognizer):
+                self._drop_speculation()  # another utterance closed: it comes first
+            elif speculation.outcome is None:
+                speculation.adopted = job  # still running: its end publishes this utterance
+                speculation.watchdog = self._watch(job)  # its recognition starts now, as it were
+                return
+            else:  # done: publish its result now, nothing to recognize again
+                self._speculation = None
+                self.speculations.used += 1
+                job = dataclasses.replace(job, ready=speculation.outcome)
+        for dropped in self._queue.put(job):
             self._statistics.finished(dropped.seconds)
             self._statistics.discarded(DISCARDED_BACKLOG)
             self._action.utterance_done(dropped.number, None)
-        self._executor.submit(self._run_next)
+        self._executor.submit(self._run_next, recognizes=job.ready is None)
 
     # -- resample -> screen -> recognize -> publish (on the executor) -------------------------------
 
     def _run_next(self) -> None:
         """One executor job: the oldest waiting utterance (none when it was dropped), watched."""
-        job = self._queue.take()
-        if job is None:
-            return
         watchdog: Optional[Timer] = None
         with self._lock:
+            job = self._queue.take()
+            if job is None:
+                return
             self._running = job
-            if self._config.recognition_timeout > 0:
-                watchdog = self._clock.call_at(
-                    self._clock.now() + self._config.recognition_timeout,
-                    functools.partial(self._overdue, job),
-                )
+            watchdog = self._watch(job)
         try:
             self._recognize_and_publish(job)
         finally:
@@ -281,10 +388,21 @@ class SpeechEventNode:
                 self._running = None
                 if watchdog is not None:
                     watchdog.cancel()
+                self._maybe_speculate()  # the utterance being collected waited for this one
+
+    def _watch(self, job: RecognitionJob) -> Optional[Timer]:
+        """Under the lock: the recognition of ``job`` starts; past recognition_timeout it is overdue."""
+        if self._config.recognition_timeout <= 0:
+            return None
+        return self._clock.call_at(
+            self._clock.now() + self._config.recognition_timeout, functools.partial(self._overdue, job)
+        )
 
     def _overdue(self, job: RecognitionJob) -> None:
         with self._lock:  # under the lock, so a cancel never reaches the next utterance's run
-            if self._running is not job:
+            speculation = self._speculation
+            adopted = speculation is not None and speculation.adopted is job and speculation.running
+            if self._running is not job and not adopted:
                 return
             self._timed_out += 1
             cancel: Optional[Callable[[], None]] = getattr(job.recognizer, "cancel", None)
@@ -301,22 +419,37 @@ class SpeechEventNode:
                 cancel()
 
     def _recognize_and_publish(self, job: RecognitionJob) -> None:
+        outcome = job.ready if job.ready is not None else self._recognize(job.audio, job.recognizer)
+        self._conclude(job, outcome)
+
+    def _recognize(self, audio: np.ndarray, recognizer: Recognizer) -> RecognitionOutcome:
+        """Resample, screen, transcribe (for a closed utterance or a speculation)."""
+        try:
+            speech = resample(audio, self._config.sample_rate, recognizer.sample_rate)
+            discard = self._screen.discard(speech, recognizer.sample_rate)
+            if discard is not None:
+                return RecognitionOutcome(discard=discard)
+            began = self._stopwatch()
+            answer = recognizer.transcribe(speech)
+            return RecognitionOutcome(answer, took=self._stopwatch() - began)
+        # A failed recognition must not stop the node; SystemExit from an engine is a failure like
+        # any other. It is said when the utterance concludes (a cancelled speculation never does).
+        except (Exception, SystemExit) as problem:
+            return RecognitionOutcome(error=problem)
+
+    def _conclude(self, job: RecognitionJob, outcome: RecognitionOutcome) -> None:
+        """Publish what recognition made of a closed utterance, tell the action, store it."""
         number, recognizer, seconds = job.number, job.recognizer, job.seconds
-        discard: Optional[Discard] = None
+        discard, took = outcome.discard, outcome.took
         text: Optional[str] = None
-        took = 0.0
         transcript = Transcript("")
         try:
-            speech = resample(job.audio, self._config.sample_rate, recognizer.sample_rate)
-            discard = self._screen.discard(speech, recognizer.sample_rate)
+            if outcome.error is not None:
+                raise outcome.error
             if discard is None:
-                began = self._stopwatch()
-                result = recognizer.transcribe(speech)
-                took = self._stopwatch() - began
                 self._statistics.transcribed(seconds, took)
-                transcript = checked_transcript(result, number)
-        # A failed recognition, or an engine that answers with something else than a transcript,
-        # must not stop the node; SystemExit from an engine is a failure like any other.
+                # An engine that answers with something else than a transcript fails the same way.
+                transcript = checked_transcript(outcome.answer, number)
         except (Exception, SystemExit):
             _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
         finally:
@@ -356,6 +489,7 @@ class SpeechEventNode:
             changed = enabled != self._enabled
             self._enabled = enabled
             if not enabled:
+                self._drop_speculation()
                 if self._pause_timer is not None:
                     self._pause_timer.cancel()
                     self._pause_timer = None
@@ -370,6 +504,7 @@ class SpeechEventNode:
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         with self._lock:  # utterances closed before this finish with the old engine
+            self._drop_speculation()
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 

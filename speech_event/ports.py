@@ -87,10 +87,19 @@ class Clock(Protocol):
         ...
 
 
+class Cancellable(Protocol):
+    def cancel(self) -> None:
+        """Do not run the job if it has not started (a started one runs on)."""
+        ...
+
+
 class Executor(Protocol):
     """Runs jobs off the subscriber callback, one at a time, in submission order."""
 
-    def submit(self, job: Callable[[], None]) -> None: ...
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> Cancellable:
+        """``recognizes``: the job runs a speech engine (a simulated worker charges recognition
+        time for it); False for one that only publishes a result already there."""
+        ...
 
 
 @dataclass(frozen=True)

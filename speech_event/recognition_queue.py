@@ -15,8 +15,20 @@ from typing import Deque, List, Optional
 import numpy as np
 
 from speech_event.ports import Recognizer
+from speech_event.speech_screen import Discard
 
 _LOG = logging.getLogger("speech_event")
+
+
+@dataclass(frozen=True)
+class RecognitionOutcome:
+    """What recognition made of an utterance's audio: the engine's answer as it gave it (checked
+    when the utterance is published, under its number), or why there is none."""
+
+    answer: object = None
+    discard: Optional[Discard] = None  # not speech: not transcribed at all
+    took: float = 0.0  # seconds the engine ran
+    error: Optional[BaseException] = None  # the engine failed (or was cancelled)
 
 
 @dataclass(frozen=True)
@@ -28,6 +40,8 @@ class RecognitionJob:
     recognizer: Recognizer  # the engine in use when the utterance closed
     language: str  # the language of that engine
     seconds: float
+    # Already recognized (a speculation on exactly this audio): only to be published.
+    ready: Optional[RecognitionOutcome] = None
 
 
 class RecognitionQueue:
@@ -44,6 +58,12 @@ class RecognitionQueue:
         """Seconds of audio waiting (not counting a recognition that is running)."""
         with self._lock:
             return self._seconds
+
+    @property
+    def waiting(self) -> int:
+        """Utterances waiting (not counting a recognition that is running)."""
+        with self._lock:
+            return len(self._jobs)
 
     def put(self, job: RecognitionJob) -> List[RecognitionJob]:
         """Queue ``job``; return the oldest jobs dropped to keep within the bound."""

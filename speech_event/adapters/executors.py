@@ -10,15 +10,43 @@ from speech_event.ports import Clock
 _LOG = logging.getLogger("speech_event")
 
 
+class _ClockJob:
+    """A job of the simulated worker: it occupies the worker from ``start`` to ``finish``, and
+    runs at ``finish``. Cancelled before then, it never runs, and a worker it was the last job of
+    is free again at once."""
+
+    def __init__(
+        self, executor: "ClockExecutor", job: Callable[[], None], start: float, finish: float
+    ) -> None:
+        self._executor = executor
+        self._job = job
+        self.start, self.finish = start, finish
+        self.done = False
+        self.timer = executor.clock.call_at(finish, self._run)
+
+    def _run(self) -> None:
+        self.done = True
+        self._job()
+
+    def cancel(self) -> None:
+        if self.done:
+            return
+        self.done = True
+        self.timer.cancel()
+        if self._executor.free_at == self.finish:
+            self._executor.release(max(self.start, self._executor.clock.now()))
+
+
 class ClockExecutor:
     """A single worker simulated on a clock: deterministic, for the fake clock.
 
-    A job starts when the worker is free and finishes ``job_seconds`` of clock time later, which
-    is when it runs. With 0 it runs right after the callback that submitted it, at the same time.
+    A job starts when the worker is free and finishes ``job_seconds`` of clock time later (no time
+    for a job that recognizes nothing), which is when it runs. With 0 it runs right after the
+    callback that submitted it, at the same time.
     """
 
     def __init__(self, clock: Clock, job_seconds: float = 0.0) -> None:
-        self._clock = clock
+        self.clock = clock
         self._job_seconds = job_seconds
         self._free_at = clock.now()
 
@@ -27,10 +55,24 @@ class ClockExecutor:
         """When the worker will have finished every job submitted so far."""
         return self._free_at
 
-    def submit(self, job: Callable[[], None]) -> None:
-        finish = max(self._free_at, self._clock.now()) + self._job_seconds
+    def release(self, when: float) -> None:
+        """The last job was cancelled: the worker is free from ``when``."""
+        self._free_at = when
+
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ClockJob:
+        start = max(self._free_at, self.clock.now())
+        finish = start + (self._job_seconds if recognizes else 0.0)
         self._free_at = finish
-        self._clock.call_at(finish, job)
+        return _ClockJob(self, job, start, finish)
+
+
+class _ThreadJob:
+    def __init__(self, job: Callable[[], None]) -> None:
+        self.job = job
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
 
 
 class ThreadExecutor:
@@ -38,12 +80,14 @@ class ThreadExecutor:
 
     def __init__(self, name: str = "speech_event_recognition") -> None:
         # Annotations inside a function are never evaluated, so the 3.9 generic is safe on 3.8.
-        self._jobs: queue.Queue[Optional[Callable[[], None]]] = queue.Queue()  # novermin
+        self._jobs: queue.Queue[Optional[_ThreadJob]] = queue.Queue()  # novermin
         self._thread = threading.Thread(target=self._work, name=name, daemon=True)
         self._thread.start()
 
-    def submit(self, job: Callable[[], None]) -> None:
-        self._jobs.put(job)
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ThreadJob:
+        handle = _ThreadJob(job)
+        self._jobs.put(handle)
+        return handle
 
     def shutdown(self, timeout: float) -> bool:
         """Let the queued jobs finish for up to ``timeout`` s; True if the worker stopped."""
@@ -53,10 +97,12 @@ class ThreadExecutor:
 
     def _work(self) -> None:
         while True:
-            job = self._jobs.get()
-            if job is None:
+            handle = self._jobs.get()
+            if handle is None:
                 return
+            if handle.cancelled:
+                continue
             try:
-                job()
+                handle.job()
             except BaseException:  # the worker must outlive any failing job, SystemExit included
                 _LOG.exception("a recognition job failed; the recognition worker goes on")

@@ -48,6 +48,7 @@ class SphinxRecognizer:
         # The sentences of a phrase-list grammar: pocketsphinx returns its best partial path when
         # no sentence fits (measured: "tell" for a "stop" it missed), which must not be published.
         self._phrases: Optional[Set[str]] = None
+        self._grammar = bool(grammar)
         if grammar:
             self._use_grammar(Path(grammar))
         elif keywords:
@@ -79,6 +80,11 @@ class SphinxRecognizer:
     @property
     def sample_rate(self) -> int:
         return SAMPLE_RATE
+
+    @property
+    def whole_phrases(self) -> bool:
+        """In grammar mode every text is a whole phrase of the grammar (early end of turn)."""
+        return self._grammar
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         pcm = np.clip(np.round(audio * 32767.0), -32768, 32767).astype("<i2").tobytes()

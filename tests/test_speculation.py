@@ -1,0 +1,211 @@
+"""Speculative recognition (issue 11): the same texts as without it, never later.
+
+The node runs twice on the same timeline of blocks, on the fake clock with the simulated worker
+(each recognition takes ``recognition_seconds`` of clock time; a speculation is a recognition
+too): once with speculative_recognition false, once true.
+"""
+
+import dataclasses
+from pathlib import Path
+from typing import List, Tuple
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fixtures.audio import speak_tones
+from harness.memory_runner import run_in_memory
+from harness.outcome import Outcome, Published
+from harness.scenario import load_scenario
+from speech_event import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, TEXT_TOPIC
+from speech_event.adapters.executors import ClockExecutor
+from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.config import SpeechEventConfig
+from speech_event.messages import Float32MultiArray, String
+from speech_event.node import SpeechEventNode
+from speech_event.ports import Transcript
+from speech_event.recognizers.tones import ToneRecognizer
+from speech_event.speculation import complete_answers, is_complete
+from tests.application import ROOT
+
+RATE = 16000
+PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)
+SPECULATING = dataclasses.replace(PLAIN, speculative_recognition=True)
+
+
+class AudioDigest:
+    """Answers with what identifies the audio exactly: a different utterance, a different text."""
+
+    sample_rate = RATE
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        self.calls += 1
+        return Transcript(f"{audio.size} {float(np.sum(audio.astype(np.float64))):.6f}")
+
+
+Block = Tuple[float, int]  # (seconds since the previous block, samples)
+
+# Gaps inside words, around the speculation gap (0.3 s), and pauses that end utterances (1.5 s).
+gaps = st.one_of(
+    st.floats(0.01, 0.2), st.floats(0.25, 0.6), st.floats(0.9, 1.49), st.floats(1.5, 4.0), st.just(1.5)
+)
+timelines = st.lists(st.tuples(gaps, st.integers(1, 4096)), min_size=1, max_size=25)
+
+
+def _published(
+    config: SpeechEventConfig, timeline: List[Block], recognition_seconds: float
+) -> List[Tuple[float, str]]:
+    clock, bus = FakeClock(), InMemoryBus()
+    published: List[Tuple[float, str]] = []
+    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((clock.now(), m.data)))  # type: ignore[attr-defined]
+    executor = ClockExecutor(clock, recognition_seconds)
+    node = SpeechEventNode(config, bus, clock, AudioDigest(), executor, stopwatch=clock.now)
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    rng = np.random.default_rng(7)
+    for gap, size in timeline:
+        clock.advance(gap)
+        sound_detection.publish(Float32MultiArray(data=rng.uniform(-0.5, 0.5, size).astype(np.float32)))
+    clock.advance(config.speech_pause_period + 0.1)
+    clock.advance_to(max(clock.now(), executor.free_at) + 0.1)
+    node.stop()
+    return published
+
+
+@settings(max_examples=300, deadline=None)
+@given(timelines, st.sampled_from([0.0, 0.05, 0.2, 0.8, 1.3, 3.0]))
+def test_with_speculation_the_same_texts_are_published_each_no_later(
+    timeline: List[Block], recognition_seconds: float
+) -> None:
+    plain = _published(PLAIN, timeline, recognition_seconds)
+    speculating = _published(SPECULATING, timeline, recognition_seconds)
+    assert [text for _, text in speculating] == [text for _, text in plain]
+    assert all(fast <= slow + 1e-9 for (fast, _), (slow, _) in zip(speculating, plain))
+
+
+def test_a_speculation_done_in_the_pause_publishes_at_the_pause_not_after_a_recognition() -> None:
+    timeline = [(0.1, 4096), (0.1, 4096)]  # one utterance: its last block at 0.2 s
+    plain = _published(PLAIN, timeline, 0.8)
+    speculating = _published(SPECULATING, timeline, 0.8)
+    # without: the pause ends at 1.7 s, then 0.8 s of recognition; with: speculated from 0.5 s to 1.3 s
+    assert [time for time, _ in plain] == [pytest.approx(2.5)]
+    assert [time for time, _ in speculating] == [pytest.approx(1.7)]
+
+
+def test_a_speculation_still_running_when_the_pause_ends_publishes_when_it_ends() -> None:
+    timeline = [(0.1, 4096)]
+    speculating = _published(SPECULATING, timeline, 3.0)  # speculated from 0.4 s: done at 3.4 s
+    assert [time for time, _ in speculating] == [pytest.approx(3.4)]
+    assert [time for time, _ in _published(PLAIN, timeline, 3.0)] == [pytest.approx(4.6)]
+
+
+def test_a_block_after_the_gap_cancels_the_speculation_and_the_worker_is_free_at_once() -> None:
+    clock, bus = FakeClock(), InMemoryBus()
+    recognizer = AudioDigest()
+    executor = ClockExecutor(clock, 1.0)
+    node = SpeechEventNode(SPECULATING, bus, clock, recognizer, executor, stopwatch=clock.now)
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.1, dtype=np.float32)))
+    clock.advance(0.5)  # the gap passed at 0.3 s: a speculation runs until 1.3 s
+    assert node.speculations.started == 1
+    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.2, dtype=np.float32)))
+    assert executor.free_at == pytest.approx(0.5)  # cancelled: it never runs
+    clock.advance(5.0)
+    assert recognizer.calls == 1  # the second speculation, used for the closed utterance
+    assert (node.speculations.started, node.speculations.used) == (2, 1)
+
+
+def _errors(outcome: Outcome) -> List[Tuple[float, str]]:
+    return [(m.time, m.text) for m in outcome.published if m.text == SOUND_DETECTION_DOWN]
+
+
+def _transcripts(outcome: Outcome) -> List[Published]:
+    return [m for m in outcome.published if m.text != SOUND_DETECTION_DOWN]
+
+
+@pytest.mark.parametrize("recognition_seconds", [0.0, 1.0])
+@pytest.mark.parametrize("path", sorted((ROOT / "scenarios").glob("*.toml")), ids=lambda path: path.stem)
+def test_every_scenario_publishes_the_same_with_and_without_speculation(
+    path: Path, recognition_seconds: float
+) -> None:
+    scenario = load_scenario(str(path), SpeechEventConfig())
+    without = dataclasses.replace(
+        scenario, config=dataclasses.replace(scenario.config, speculative_recognition=False)
+    )
+    assert scenario.config.speculative_recognition  # the default
+    plain = run_in_memory(without, recognition_seconds)
+    speculating = run_in_memory(scenario, recognition_seconds)
+    # The health checks' errors come at their times either way; transcripts come the same, in the
+    # same order, each no later (so they may come before an error they used to follow).
+    assert _errors(speculating) == _errors(plain)
+    assert [m.text for m in _transcripts(speculating)] == [m.text for m in _transcripts(plain)]
+    assert all(a.time <= b.time + 1e-9 for a, b in zip(_transcripts(speculating), _transcripts(plain)))
+    assert [r.text for r in speculating.results] == [r.text for r in plain.results]
+    assert speculating.responses == plain.responses
+
+
+def _tones_published(config: SpeechEventConfig, said: List[Tuple[float, str]]) -> List[Tuple[float, str]]:
+    """Words in the tones voice, each starting at its time: (time, text) published."""
+    clock, bus = FakeClock(), InMemoryBus()
+    published: List[Tuple[float, str]] = []
+    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((round(clock.now(), 6), m.data)))  # type: ignore[attr-defined]
+    node = SpeechEventNode(config, bus, clock, ToneRecognizer(), ClockExecutor(clock), stopwatch=clock.now)
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    for start, text in said:
+        clock.advance_to(start)
+        audio = speak_tones(text, RATE) if text else np.zeros(4096, dtype=np.float32)
+        for offset in range(0, audio.size, 4096):
+            clock.advance(4096 / RATE)
+            sound_detection.publish(Float32MultiArray(data=audio[offset : offset + 4096]))
+    clock.advance(config.speech_pause_period + 0.1)
+    node.stop()
+    return published
+
+
+EARLY = dataclasses.replace(SPECULATING, early_pause=0.5)
+
+
+def _ends(text: str, start: float = 0.0) -> float:
+    """When the last block of ``text`` said from ``start`` arrives."""
+    return round(start + -(-speak_tones(text, RATE).size // 4096) * 4096 / RATE, 6)
+
+
+def test_a_complete_answer_is_published_early_pause_after_the_speaker_stops() -> None:
+    assert _tones_published(EARLY, [(0.0, "yes")]) == [(round(_ends("yes") + 0.5, 6), "yes")]
+    assert _tones_published(SPECULATING, [(0.0, "yes")]) == [(round(_ends("yes") + 1.5, 6), "yes")]
+
+
+def test_an_answer_not_known_to_be_complete_waits_the_whole_pause() -> None:
+    assert _tones_published(EARLY, [(0.0, "go left")]) == [(round(_ends("go left") + 1.5, 6), "go left")]
+
+
+def test_two_speculations_that_agree_end_the_turn_early() -> None:
+    """The speaker goes quiet, a block of silence comes 0.4 s later: the second speculation says
+    what the first said, so the answer is complete."""
+    config = dataclasses.replace(EARLY, complete_answers="")
+    silence_at = _ends("go left") + 0.4
+    published = _tones_published(config, [(0.0, "go left"), (silence_at, "")])
+    assert published == [(round(silence_at + 4096 / RATE + 0.5, 6), "go left")]
+
+
+def test_speech_that_goes_on_after_an_early_publish_is_the_next_utterance() -> None:
+    later = _ends("yes") + 0.7  # after the early publish at +0.5, within the whole pause
+    published = _tones_published(EARLY, [(0.0, "yes"), (later, "please")])
+    assert [text for _, text in published] == ["yes", "please"]
+
+
+def test_completeness() -> None:
+    answers = complete_answers(" Yes,no , yego,oya,")
+    assert answers == frozenset({"yes", "no", "yego", "oya"})
+    assert is_complete("Yego", None, False, answers)
+    assert not is_complete("go left", None, False, answers)
+    assert is_complete("go left", "go left", False, answers)
+    assert is_complete("go left", None, True, answers)
+    assert not is_complete("", "", True, answers)
