@@ -73,10 +73,13 @@ class LargeConformerStandIn:
 
 def _speech(voice: str, seconds: float) -> np.ndarray:
     """About ``seconds`` of speech: phrases in the voice, one after another, cut to length."""
-    phrases = COMMANDS.read_text().split("\n") if voice == "tts" else ["go to the kitchen please"]
+    lines = [line.strip() for line in COMMANDS.read_text().splitlines()]
+    phrases = [line for line in lines if line and not line.startswith("#")]
+    if voice != "tts":
+        phrases = ["go to the kitchen please"]
     parts: List[np.ndarray] = []
     while sum(part.size for part in parts) < seconds * RATE:
-        phrase = phrases[len(parts) % len(phrases)].strip() or "yes"
+        phrase = phrases[len(parts) % len(phrases)]
         parts.append(speak_tts(phrase, RATE) if voice == "tts" else speak_tones(phrase, RATE))
     return np.concatenate(parts)[: int(seconds * RATE)].astype(np.float32)
 
