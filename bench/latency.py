@@ -13,6 +13,7 @@
     gap: a speculation starts and the next word discards it), on the fake clock with the engine
     run for real; every speculation runs to its end there, so this is the most it can cost.
 
+Pocketsphinx cannot be stopped, so the node does not speculate with it: its two figures show that.
 Engines: the fake (tones) recognizer, the NeMo engine on the tones fixture model, pocketsphinx
 with a grammar and with its language model, and a stand-in for the large conformer (120 M
 parameters, real-time factor 0.22 on 2 cores as bench/nemo_parity.py measured it; the real one

@@ -276,10 +276,12 @@ class SpeechEventNode:
 
     def _maybe_speculate(self) -> None:
         """Under the lock: speculate on the utterance being collected if its gap has passed, the
-        worker is idle (closed utterances first) and nothing is speculated on yet."""
-        wanted = (
-            self._config.speculative_recognition and self._enabled and self._assembler.pending_samples > 0
-        )
+        worker is idle (closed utterances first) and nothing is speculated on yet. Only with an
+        engine that can be stopped: one that cannot would run a speculation made worthless to its
+        end, and an utterance closing meanwhile would wait for it (pocketsphinx)."""
+        stoppable = callable(getattr(self._recognizer, "cancel", None))
+        wanted = self._config.speculative_recognition and stoppable and self._enabled
+        wanted = wanted and self._assembler.pending_samples > 0
         idle = self._running is None and self._queue.waiting == 0 and self._speculation is None
         gap = self._last_arrival + self._config.speculation_gap
         if not (wanted and idle and self._gap_timer is None and self._clock.now() >= gap - TIMER_TOLERANCE):

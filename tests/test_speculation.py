@@ -47,6 +47,26 @@ class AudioDigest:
         self.calls += 1
         return Transcript(f"{audio.size} {float(np.sum(audio.astype(np.float64))):.6f}")
 
+    def cancel(self) -> None:
+        """Stops at once (the simulated worker is free when a speculation is cancelled)."""
+
+
+class Uncancellable:
+    sample_rate = RATE
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        return Transcript("heard")
+
+
+def test_an_engine_that_cannot_be_stopped_is_not_speculated_with() -> None:
+    clock, bus = FakeClock(), InMemoryBus()
+    node = SpeechEventNode(SPECULATING, bus, clock, Uncancellable(), ClockExecutor(clock, 1.0))
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.1, dtype=np.float32)))
+    clock.advance(5.0)
+    assert node.speculations.started == 0
+
 
 Block = Tuple[float, int]  # (seconds since the previous block, samples)
 
