@@ -14,7 +14,7 @@ import tempfile
 import time
 import xmlrpc.client
 from pathlib import Path
-from typing import Any, Callable, List
+from typing import Any, Callable, Dict, List
 
 import numpy as np
 import rosgraph
@@ -23,6 +23,7 @@ from rospy.numpy_msg import numpy_msg
 from std_msgs import msg as std_msgs
 
 from fixtures.audio import noise, speak_tones
+from fixtures.tones_model import build_tones_model
 from harness.ros_runner import NODE_SCRIPT, Processes, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -159,6 +160,8 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
             f"roscore: burst of {burst} blocks published in {sent * 1e3:.0f} ms: "
             f"{received} received by the node, {burst - received} lost (target 0)"
         )
+        processes.stop(node)
+        engines_on_roscore(environment)
     finally:
         rospy.signal_shutdown("bench done")
         processes.stop_all()
@@ -185,7 +188,72 @@ def service_round_trips(calls: int = 200) -> None:
         )
 
 
-def _more_than(texts: List[str], count: int) -> Callable[[], bool]:
+def engines_on_roscore(environment: Dict[str, str], runs: int = 2) -> None:
+    """bench/latency.py's figure (a) on a real roscore: the node as its own process with each
+    engine, utterances of 1 to 10 s published at once, last block to text minus the pause."""
+    from bench.latency import LENGTHS, _speech
+
+    work = Path(tempfile.mkdtemp(prefix="speech_event_bench_engines_"))
+    tones = build_tones_model(work / "tones")
+    grammar = NODE_SCRIPT.parents[1] / "harness" / "data" / "robot_commands.txt"
+    engines = [
+        ("fake (tones)", "fake", "", "tones"),
+        ("NeMo engine, tones fixture model", "nemo", f"en_model_path {tones}\n", "tones"),
+        ("pocketsphinx grammar", "pocketsphinx", f"pocketsphinx_grammar {grammar}\n", "tts"),
+        ("pocketsphinx language model", "pocketsphinx", "", "tts"),
+    ]
+    transport = RosTransport()
+    arrivals: List[float] = []
+    transport.subscribe(TEXT_TOPIC, String, lambda message: arrivals.append(time.perf_counter()))
+    signal = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
+    processes = Processes(environment, work)
+    pause = SpeechEventConfig().speech_pause_period
+    try:
+        for name, recognizer, settings, voice in engines:
+            for speculating in (False, True):
+                (work / "node.ini").write_text(
+                    settings + "publish_unrecognized true\nmax_utterance_length 30\n"
+                    f"speculative_recognition {str(speculating).lower()}\n"
+                )
+                command = [
+                    sys.executable,
+                    str(NODE_SCRIPT),
+                    "-c",
+                    str(work / "node.ini"),
+                    "--recognizer",
+                    recognizer,
+                ]
+                node = processes.start("node", command)
+                _wait(
+                    lambda: (
+                        signal.connections() > 0
+                        and transport._subscribers[TEXT_TOPIC].get_num_connections() > 0
+                    )
+                )
+                for seconds in LENGTHS:
+                    audio = _speech(voice, seconds)
+                    latencies = []
+                    for _ in range(runs):
+                        count = len(arrivals)
+                        for start in range(0, audio.size, BLOCK):
+                            signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+                        last_block = time.perf_counter()
+                        _wait(_more_than(arrivals, count), timeout=60)
+                        latencies.append(arrivals[-1] - last_block - pause)
+                        time.sleep(0.2)
+                    print(
+                        f"roscore: {name:34s} {seconds:4.0f} s, {'with' if speculating else 'without'} "
+                        f"speculation: median {1000 * statistics.median(latencies):6.0f} ms, "
+                        f"max {1000 * max(latencies):6.0f} ms",
+                        flush=True,
+                    )
+                processes.stop(node)
+                _wait(lambda: signal.connections() == 0)
+    finally:
+        processes.stop_all()
+
+
+def _more_than(texts: List[Any], count: int) -> Callable[[], bool]:
     return lambda: len(texts) > count
 
 
