@@ -233,6 +233,8 @@ class SpeechEventNode:
                 self._collecting_since = self._last_arrival
                 self._action.utterance_started(self._last_arrival)
             completed = self._assembler.add(samples)
+            if completed:  # cut at the length limit: what is left is a new utterance to speculate on
+                self._last_speculated = None
             for index, utterance in enumerate(completed):
                 # Cut at the length limit: the speech goes on in the next utterance.
                 self._submit(utterance, index < len(completed) - 1 or self._assembler.pending_samples > 0)
@@ -492,6 +494,7 @@ class SpeechEventNode:
             self._enabled = enabled
             if not enabled:
                 self._drop_speculation()
+                self._last_speculated, self._ends_early = None, False
                 if self._pause_timer is not None:
                     self._pause_timer.cancel()
                     self._pause_timer = None

@@ -229,3 +229,30 @@ def test_completeness() -> None:
     assert is_complete("go left", "go left", False, answers)
     assert is_complete("go left", None, True, answers)
     assert not is_complete("", "", True, answers)
+
+
+def test_what_was_speculated_before_the_node_was_disabled_does_not_end_the_next_turn_early() -> None:
+    """Agreement is between speculations on one utterance: a speculation on speech thrown away by
+    set_enabled false is no evidence about the next one."""
+    config = dataclasses.replace(EARLY, complete_answers="")
+    clock, bus = FakeClock(), InMemoryBus()
+    published: List[Tuple[float, str]] = []
+    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((round(clock.now(), 6), m.data)))  # type: ignore[attr-defined]
+    node = SpeechEventNode(config, bus, clock, ToneRecognizer(), ClockExecutor(clock), stopwatch=clock.now)
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    node.start()
+
+    def say(text: str) -> float:
+        audio = speak_tones(text, RATE)
+        for offset in range(0, audio.size, 4096):
+            clock.advance(4096 / RATE)
+            sound_detection.publish(Float32MultiArray(data=audio[offset : offset + 4096]))
+        return clock.now()
+
+    say("go left")
+    clock.advance(0.4)  # speculated: "go left"
+    node.set_enabled(False)
+    node.set_enabled(True)
+    last = say("go left")
+    clock.advance(2.0)
+    assert published == [(round(last + 1.5, 6), "go left")]  # the whole pause: one speculation only
