@@ -15,12 +15,15 @@
 
 Pocketsphinx cannot be stopped, so the node does not speculate with it: its two figures show that.
 Engines: the fake (tones) recognizer, the NeMo engine on the tones fixture model, pocketsphinx
-with a grammar and with its language model, and a stand-in for the large conformer (120 M
-parameters, real-time factor 0.22 on 2 cores as bench/nemo_parity.py measured it; the real one
-needs NeMo to export): it sleeps 0.22 s per second of audio and stops when cancelled.
+with a grammar and with its language model, and the large conformer: with
+SPEECH_EVENT_LARGE_MODEL=DIR, the NeMo engine on the random-weight 119 M-parameter model that
+bench/nemo_parity.py builds and exports (it needs NeMo; the exported directory is left in
+/tmp/speech_event_parity_*/exported); without, a stand-in that takes that model's measured time
+(real-time factor 0.22 on 2 cores), sleeping 0.22 s per second of audio, and stops when cancelled.
 """
 
 import dataclasses
+import os
 import statistics
 import tempfile
 import threading
@@ -119,8 +122,20 @@ def _engines(work: Path) -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
         ),
         "pocketsphinx grammar": (lambda: SphinxRecognizer(grammar=grammar), "tts"),
         "pocketsphinx language model": (SphinxRecognizer, "tts"),
-        f"large conformer stand-in (RTF {LARGE_RTF})": (LargeConformerStandIn, "tones"),
+        **_large_conformer(),
     }
+
+
+def _large_conformer() -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
+    exported = os.environ.get("SPEECH_EVENT_LARGE_MODEL")
+    if exported:
+        return {
+            "large conformer (119 M, random weights)": (
+                lambda: NemoTransducerRecognizer(Path(exported)),
+                "tts",
+            )
+        }
+    return {f"large conformer stand-in (RTF {LARGE_RTF})": (LargeConformerStandIn, "tones")}
 
 
 def speculation_latency() -> None:

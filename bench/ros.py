@@ -202,6 +202,9 @@ def engines_on_roscore(environment: Dict[str, str], runs: int = 2) -> None:
         ("pocketsphinx grammar", "pocketsphinx", f"pocketsphinx_grammar {grammar}\n", "tts"),
         ("pocketsphinx language model", "pocketsphinx", "", "tts"),
     ]
+    large = os.environ.get("SPEECH_EVENT_LARGE_MODEL")  # see bench/latency.py
+    if large:
+        engines.append(("large conformer (119 M, random weights)", "nemo", f"en_model_path {large}\n", "tts"))
     transport = RosTransport()
     arrivals: List[float] = []
     transport.subscribe(TEXT_TOPIC, String, lambda message: arrivals.append(time.perf_counter()))
