@@ -448,6 +448,7 @@ class _StandIn:
         self._process = self._up(self._launch())
         self._next: Optional[subprocess.Popen[str]] = None
         self._sent = 0  # messages this incarnation has published
+        self._intruders: List[subprocess.Popen[str]] = []  # the wrong-type publishers started
 
     def _launch(self) -> "subprocess.Popen[str]":
         name = "soundDetection" if self._incarnations == 0 else f"soundDetection{self._incarnations}"
@@ -484,9 +485,11 @@ class _StandIn:
                 f"the node to receive message {sent}",
             )
         elif isinstance(event, Publish):
-            intruder = self._processes.start("wrong_type", [*self._command, "--wrong-type", str(index)])
-            if intruder.wait(EVENT_TIMEOUT) != 0:
-                raise ReplayError("the wrong-type publisher failed; see its log")
+            # Not waited for here: starting a ROS node takes a second or more, which in real time
+            # would stop the scenario's next blocks for longer than a pause. Checked at the end.
+            self._intruders.append(
+                self._processes.start("wrong_type", [*self._command, "--wrong-type", str(index)])
+            )
         elif isinstance(event, GoDown):
             if event.kind == "crash":
                 os.killpg(self._process.pid, signal.SIGKILL)
@@ -504,6 +507,9 @@ class _StandIn:
         for process in (self._process, self._next):
             if process is not None:
                 self._processes.stop(process)
+        for intruder in self._intruders:
+            if intruder.wait(EVENT_TIMEOUT) != 0:
+                raise ReplayError("the wrong-type publisher failed; see its log")
 
 
 def _filled(word: str, values: Dict[str, str]) -> str:
