@@ -4,7 +4,8 @@
     of 1, 3, 5 and 10 s, the time from the last block to the text at a subscriber, minus the
     pause (1.5 s), median and max of 3 runs, without and with speculative recognition. The blocks
     of an utterance are published at once (the latency counts from the last one); the speculation
-    starts 0.3 s after it. Target with speculation: pause + 50 ms or less whenever recognition
+    starts 0.3 s after it. Each run's node first transcribes the same utterance once, unmeasured,
+    as a node on the robot has (an engine that cannot be stopped speculates only once timed). Target with speculation: pause + 50 ms or less whenever recognition
     takes less than the pause minus the gap (1.2 s).
 (b) Early end of turn (early_pause 0.5 s): "yes" in the tones voice, time from the last block to the
     text (target 0.5 s).
@@ -13,7 +14,8 @@
     gap: a speculation starts and the next word discards it), on the fake clock with the engine
     run for real; every speculation runs to its end there, so this is the most it can cost.
 
-Pocketsphinx cannot be stopped, so the node does not speculate with it: its two figures show that.
+Pocketsphinx cannot be stopped: the node speculates with it only when its measured run time ends
+before the pause does (grammar mode always; the language model on short utterances).
 Engines: the fake (tones) recognizer, the NeMo engine on the tones fixture model, pocketsphinx
 with a grammar and with its language model, and the large conformer: with
 SPEECH_EVENT_LARGE_MODEL=DIR, the NeMo engine on the random-weight 119 M-parameter model that
@@ -103,10 +105,13 @@ def _latency(recognizer: Recognizer, config: SpeechEventConfig, audio: np.ndarra
     node = SpeechEventNode(quiet, bus, clock, recognizer, executor)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     node.start()
-    for start in range(0, audio.size, BLOCK):
-        sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
-    last_block = time.monotonic()
-    heard.wait(60.0)
+    for _ in range(2):  # the first times the engine; its text comes after the pause, so the
+        heard.clear()  # second is a new utterance
+        arrived.clear()
+        for start in range(0, audio.size, BLOCK):
+            sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+        last_block = time.monotonic()
+        heard.wait(60.0)
     node.stop()
     executor.shutdown(60.0)
     return arrived[0] - last_block - config.speech_pause_period

@@ -34,12 +34,13 @@ class Rig:
         self.diagnostics: List[DiagnosticArray] = []
         self.bus.subscribe(TEXT_TOPIC, String, self._record)
         self.bus.subscribe(DIAGNOSTICS_TOPIC, DiagnosticArray, self.diagnostics.append)  # type: ignore[arg-type]
+        self.executor = executor or ClockExecutor(self.clock, job_seconds)
         self.node = SpeechEventNode(
             config,
             self.bus,
             self.clock,
             recognizer,
-            executor or ClockExecutor(self.clock, job_seconds),
+            self.executor,
             build_engine,
             stopwatch=stopwatch or self.clock.now,
         )

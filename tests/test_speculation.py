@@ -1,13 +1,14 @@
 """Speculative recognition (issue 11): the same texts as without it, never later.
 
 The node runs twice on the same timeline of blocks, on the fake clock with the simulated worker
-(each recognition takes ``recognition_seconds`` of clock time; a speculation is a recognition
-too): once with speculative_recognition false, once true.
+(each recognition takes ``recognition_seconds`` of clock time, and as long on the node's
+stopwatch; a speculation is a recognition too): once with speculative_recognition false, once true.
 """
 
 import dataclasses
+import itertools
 from pathlib import Path
-from typing import List, Tuple
+from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 import pytest
@@ -15,28 +16,29 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
+from fixtures.tts import speak_tts
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome, Published
 from harness.scenario import load_scenario
-from speech_event import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, TEXT_TOPIC
+from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.executors import ClockExecutor
-from speech_event.adapters.fake_clock import FakeClock
-from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig
-from speech_event.messages import Float32MultiArray, String
-from speech_event.node import SpeechEventNode
-from speech_event.ports import Transcript
+from speech_event.messages import Float32MultiArray
+from speech_event.ports import Recognizer, Transcript
+from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
-from speech_event.speculation import complete_answers, is_complete
+from speech_event.speculation import RunTimes, complete_answers, is_complete
 from tests.application import ROOT
+from tests.rig import Rig
 
 RATE = 16000
 PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)
 SPECULATING = dataclasses.replace(PLAIN, speculative_recognition=True)
 
 
-class AudioDigest:
-    """Answers with what identifies the audio exactly: a different utterance, a different text."""
+class UnstoppableDigest:
+    """Answers with what identifies the audio exactly: a different utterance, a different text.
+    It has no ``cancel``: a speculation it started runs to its end (as pocketsphinx)."""
 
     sample_rate = RATE
 
@@ -47,25 +49,32 @@ class AudioDigest:
         self.calls += 1
         return Transcript(f"{audio.size} {float(np.sum(audio.astype(np.float64))):.6f}")
 
+
+class AudioDigest(UnstoppableDigest):
     def cancel(self) -> None:
         """Stops at once (the simulated worker is free when a speculation is cancelled)."""
 
 
-class Uncancellable:
-    sample_rate = RATE
-
-    def transcribe(self, audio: np.ndarray) -> Transcript:
-        return Transcript("heard")
+def _rounded(rig: Rig) -> List[Tuple[float, str]]:
+    return [(round(time, 6), text) for time, text in rig.published]
 
 
-def test_an_engine_that_cannot_be_stopped_is_not_speculated_with() -> None:
-    clock, bus = FakeClock(), InMemoryBus()
-    node = SpeechEventNode(SPECULATING, bus, clock, Uncancellable(), ClockExecutor(clock, 1.0))
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    node.start()
-    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.1, dtype=np.float32)))
-    clock.advance(5.0)
-    assert node.speculations.started == 0
+def stopwatch_of(recognition_seconds: float) -> Callable[[], float]:
+    """The node reads its stopwatch as a recognition starts, before the engine runs and after it:
+    on this one each recognition takes ``recognition_seconds``, as on the simulated worker."""
+    ticks = itertools.count(0.0, recognition_seconds / 2)
+    return lambda: next(ticks)
+
+
+def test_run_times_bound_a_longer_utterance_by_length_and_a_shorter_by_the_time_taken() -> None:
+    engine, other = AudioDigest(), AudioDigest()
+    run_times = RunTimes()
+    assert run_times.expected(engine, 1.0) is None
+    run_times.record(engine, 2.0, 0.5)
+    run_times.record(engine, 1.0, 0.1)
+    assert run_times.expected(engine, 1.0) == 0.5
+    assert run_times.expected(engine, 8.0) == 2.0
+    assert run_times.expected(other, 1.0) is None
 
 
 Block = Tuple[float, int]  # (seconds since the previous block, samples)
@@ -78,32 +87,34 @@ timelines = st.lists(st.tuples(gaps, st.integers(1, 4096)), min_size=1, max_size
 
 
 def _published(
-    config: SpeechEventConfig, timeline: List[Block], recognition_seconds: float
+    config: SpeechEventConfig,
+    timeline: List[Block],
+    recognition_seconds: float,
+    recognizer: Optional[Recognizer] = None,
 ) -> List[Tuple[float, str]]:
-    clock, bus = FakeClock(), InMemoryBus()
-    published: List[Tuple[float, str]] = []
-    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((clock.now(), m.data)))  # type: ignore[attr-defined]
-    executor = ClockExecutor(clock, recognition_seconds)
-    node = SpeechEventNode(config, bus, clock, AudioDigest(), executor, stopwatch=clock.now)
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    node.start()
+    stopwatch = stopwatch_of(recognition_seconds)
+    rig = Rig(config, recognizer or AudioDigest(), job_seconds=recognition_seconds, stopwatch=stopwatch)
+    assert isinstance(rig.executor, ClockExecutor)
     rng = np.random.default_rng(7)
     for gap, size in timeline:
-        clock.advance(gap)
-        sound_detection.publish(Float32MultiArray(data=rng.uniform(-0.5, 0.5, size).astype(np.float32)))
-    clock.advance(config.speech_pause_period + 0.1)
-    clock.advance_to(max(clock.now(), executor.free_at) + 0.1)
-    node.stop()
-    return published
+        rig.clock.advance(gap)
+        rig.sound_detection.publish(Float32MultiArray(data=rng.uniform(-0.5, 0.5, size).astype(np.float32)))
+    rig.clock.advance(config.speech_pause_period + 0.1)
+    rig.clock.advance_to(max(rig.clock.now(), rig.executor.free_at) + 0.1)
+    rig.node.stop()
+    return rig.published
 
 
 @settings(max_examples=300, deadline=None)
-@given(timelines, st.sampled_from([0.0, 0.05, 0.2, 0.8, 1.3, 3.0]))
+@given(timelines, st.sampled_from([0.0, 0.05, 0.2, 0.8, 1.3, 3.0]), st.booleans())
 def test_with_speculation_the_same_texts_are_published_each_no_later(
-    timeline: List[Block], recognition_seconds: float
+    timeline: List[Block], recognition_seconds: float, stoppable: bool
 ) -> None:
-    plain = _published(PLAIN, timeline, recognition_seconds)
-    speculating = _published(SPECULATING, timeline, recognition_seconds)
+    """Engines that stop when cancelled, and engines that do not (they speculate only when their
+    run time fits in the pause)."""
+    engine = AudioDigest if stoppable else UnstoppableDigest
+    plain = _published(PLAIN, timeline, recognition_seconds, engine())
+    speculating = _published(SPECULATING, timeline, recognition_seconds, engine())
     assert [text for _, text in speculating] == [text for _, text in plain]
     assert all(fast <= slow + 1e-9 for (fast, _), (slow, _) in zip(speculating, plain))
 
@@ -124,21 +135,70 @@ def test_a_speculation_still_running_when_the_pause_ends_publishes_when_it_ends(
     assert [time for time, _ in _published(PLAIN, timeline, 3.0)] == [pytest.approx(4.6)]
 
 
+def _block(rig: Rig, value: float) -> None:
+    rig.sound_detection.publish(Float32MultiArray(data=np.full(100, value, dtype=np.float32)))
+
+
 def test_a_block_after_the_gap_cancels_the_speculation_and_the_worker_is_free_at_once() -> None:
-    clock, bus = FakeClock(), InMemoryBus()
     recognizer = AudioDigest()
-    executor = ClockExecutor(clock, 1.0)
-    node = SpeechEventNode(SPECULATING, bus, clock, recognizer, executor, stopwatch=clock.now)
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    node.start()
-    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.1, dtype=np.float32)))
-    clock.advance(0.5)  # the gap passed at 0.3 s: a speculation runs until 1.3 s
-    assert node.speculations.started == 1
-    sound_detection.publish(Float32MultiArray(data=np.full(100, 0.2, dtype=np.float32)))
-    assert executor.free_at == pytest.approx(0.5)  # cancelled: it never runs
-    clock.advance(5.0)
+    rig = Rig(SPECULATING, recognizer, job_seconds=1.0)
+    assert isinstance(rig.executor, ClockExecutor)
+    _block(rig, 0.1)
+    rig.clock.advance(0.5)  # the gap passed at 0.3 s: a speculation runs until 1.3 s
+    assert rig.node.speculations.started == 1
+    _block(rig, 0.2)
+    assert rig.executor.free_at == pytest.approx(0.5)  # cancelled: it never runs
+    rig.clock.advance(5.0)
     assert recognizer.calls == 1  # the second speculation, used for the closed utterance
-    assert (node.speculations.started, node.speculations.used) == (2, 1)
+    assert (rig.node.speculations.started, rig.node.speculations.used) == (2, 1)
+
+
+def _timed_unstoppable(recognition_seconds: float) -> Tuple[Rig, UnstoppableDigest]:
+    """A node whose engine cannot be stopped, after one utterance (0.1 s at 0.0 s) timed it."""
+    recognizer = UnstoppableDigest()
+    rig = Rig(
+        SPECULATING, recognizer, job_seconds=recognition_seconds, stopwatch=stopwatch_of(recognition_seconds)
+    )
+    rig.sound_detection.publish(Float32MultiArray(data=np.full(1600, 0.1, dtype=np.float32)))
+    rig.clock.advance(5.0)
+    assert rig.node.speculations.started == 0  # its run time was not known yet
+    assert _rounded(rig) == [(round(1.5 + recognition_seconds, 6), "1600 160.000002")]
+    return rig, recognizer
+
+
+def test_an_engine_that_cannot_be_stopped_speculates_once_timed_when_it_ends_before_the_pause() -> None:
+    rig, _ = _timed_unstoppable(0.4)
+    _block(rig, 0.1)  # at 5.0 s: speculated from 5.3 s to 5.7 s, the pause ends at 6.5 s
+    rig.clock.advance(2.0)
+    assert (rig.node.speculations.started, rig.node.speculations.used) == (1, 1)
+    assert _rounded(rig)[1] == (6.5, "100 10.000000")
+
+
+def test_an_engine_that_cannot_be_stopped_does_not_speculate_when_it_might_still_run_as_the_pause_ends() -> (
+    None
+):
+    rig, _ = _timed_unstoppable(1.0)  # 1.0 s with the margin (1.25 s) is over pause - gap (1.2 s)
+    _block(rig, 0.1)
+    rig.clock.advance(3.0)
+    assert rig.node.speculations.started == 0
+    assert _rounded(rig)[1] == (7.5, "100 10.000000")
+
+
+def test_a_speculation_that_cannot_be_stopped_runs_on_and_holds_the_worker_to_its_end() -> None:
+    rig, recognizer = _timed_unstoppable(0.9)  # 0.9 s with the margin fits in pause - gap (1.2 s)
+    assert isinstance(rig.executor, ClockExecutor)
+    _block(rig, 0.1)
+    rig.clock.advance(0.4)  # speculating from 5.3 s to 6.2 s
+    _block(rig, 0.2)  # at 5.4 s: worthless, but it runs on, holding the worker
+    assert rig.executor.free_at == pytest.approx(6.2)
+    rig.clock.advance(0.4)  # 5.8 s: the gap after 5.4 s passed, but the worker is not idle
+    assert rig.node.speculations.started == 1
+    rig.clock.advance(0.45)  # 6.25 s: it ended; 0.65 s left of the pause is too little to speculate
+    assert (rig.node.speculations.started, recognizer.calls) == (1, 2)
+    assert rig.node.speculations.wasted_seconds == pytest.approx(0.45)  # its engine time, on this stopwatch
+    rig.clock.advance(2.0)
+    assert _rounded(rig)[1] == (7.8, "200 30.000000")  # 0.9 s after the pause at 6.9 s
+    assert rig.node.speculations.started == 1
 
 
 def _errors(outcome: Outcome) -> List[Tuple[float, str]]:
@@ -172,21 +232,13 @@ def test_every_scenario_publishes_the_same_with_and_without_speculation(
 
 def _tones_published(config: SpeechEventConfig, said: List[Tuple[float, str]]) -> List[Tuple[float, str]]:
     """Words in the tones voice, each starting at its time: (time, text) published."""
-    clock, bus = FakeClock(), InMemoryBus()
-    published: List[Tuple[float, str]] = []
-    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((round(clock.now(), 6), m.data)))  # type: ignore[attr-defined]
-    node = SpeechEventNode(config, bus, clock, ToneRecognizer(), ClockExecutor(clock), stopwatch=clock.now)
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    node.start()
+    rig = Rig(config, ToneRecognizer())
     for start, text in said:
-        clock.advance_to(start)
-        audio = speak_tones(text, RATE) if text else np.zeros(4096, dtype=np.float32)
-        for offset in range(0, audio.size, 4096):
-            clock.advance(4096 / RATE)
-            sound_detection.publish(Float32MultiArray(data=audio[offset : offset + 4096]))
-    clock.advance(config.speech_pause_period + 0.1)
-    node.stop()
-    return published
+        rig.clock.advance_to(start)
+        rig.speak(speak_tones(text, RATE) if text else np.zeros(4096, dtype=np.float32))
+    rig.clock.advance(config.speech_pause_period + 0.1)
+    rig.node.stop()
+    return _rounded(rig)
 
 
 EARLY = dataclasses.replace(SPECULATING, early_pause=0.5)
@@ -234,25 +286,32 @@ def test_completeness() -> None:
 def test_what_was_speculated_before_the_node_was_disabled_does_not_end_the_next_turn_early() -> None:
     """Agreement is between speculations on one utterance: a speculation on speech thrown away by
     set_enabled false is no evidence about the next one."""
-    config = dataclasses.replace(EARLY, complete_answers="")
-    clock, bus = FakeClock(), InMemoryBus()
-    published: List[Tuple[float, str]] = []
-    bus.subscribe(TEXT_TOPIC, String, lambda m: published.append((round(clock.now(), 6), m.data)))  # type: ignore[attr-defined]
-    node = SpeechEventNode(config, bus, clock, ToneRecognizer(), ClockExecutor(clock), stopwatch=clock.now)
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    node.start()
+    rig = Rig(dataclasses.replace(EARLY, complete_answers=""), ToneRecognizer())
+    rig.speak(speak_tones("go left", RATE))
+    rig.clock.advance(0.4)  # speculated: "go left"
+    rig.node.set_enabled(False)
+    rig.node.set_enabled(True)
+    rig.speak(speak_tones("go left", RATE))
+    last = rig.clock.now()
+    rig.clock.advance(2.0)
+    assert _rounded(rig) == [(round(last + 1.5, 6), "go left")]  # the whole pause: one speculation only
 
-    def say(text: str) -> float:
-        audio = speak_tones(text, RATE)
-        for offset in range(0, audio.size, 4096):
-            clock.advance(4096 / RATE)
-            sound_detection.publish(Float32MultiArray(data=audio[offset : offset + 4096]))
-        return clock.now()
 
-    say("go left")
-    clock.advance(0.4)  # speculated: "go left"
-    node.set_enabled(False)
-    node.set_enabled(True)
-    last = say("go left")
-    clock.advance(2.0)
-    assert published == [(round(last + 1.5, 6), "go left")]  # the whole pause: one speculation only
+COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
+
+
+def test_in_grammar_mode_pocketsphinx_ends_the_turn_early_pause_after_a_whole_phrase() -> None:
+    """pocketsphinx cannot be stopped: it speculates once timed (here each run takes 0.2 s of the
+    simulated worker), and any text it gives in grammar mode is a whole phrase of the grammar."""
+    config = dataclasses.replace(EARLY, language="english")
+    rig = Rig(config, SphinxRecognizer(grammar=str(COMMANDS)), job_seconds=0.2, stopwatch=stopwatch_of(0.2))
+    rig.speak(speak_tts("go to the kitchen", RATE))
+    first = rig.clock.now()
+    rig.clock.advance(3.0)  # not timed yet: recognized when the whole pause ends
+    rig.speak(speak_tts("stop", RATE))
+    second = rig.clock.now()
+    rig.clock.advance(3.0)
+    assert _rounded(rig) == [
+        (round(first + 1.5 + 0.2, 6), "go to the kitchen"),
+        (round(second + 0.5, 6), "stop"),
+    ]
