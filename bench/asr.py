@@ -19,7 +19,7 @@ from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
 from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.features import FeatureSettings, features
 from speech_event.ports import Recognizer
 from speech_event.recognizers.sphinx import SphinxRecognizer
@@ -127,7 +127,7 @@ def nemo_engine() -> None:
         features(audio, settings)
     print(f"NeMo features: RTF {(time.perf_counter() - start) / 100:.4f} (10 s of audio, 10 runs)")
     with tempfile.TemporaryDirectory() as work:
-        model = NemoTransducerRecognizer(build_random_transducer(Path(work) / "model"))
+        model = NemoRecognizer(build_random_transducer(Path(work) / "model"))
         start = time.perf_counter()
         model.transcribe(audio)
         print(
@@ -137,7 +137,7 @@ def nemo_engine() -> None:
         tones = build_tones_model(Path(work) / "tones")
         built = time.perf_counter() - start
         speech = resample(speak_tones("please bring the red cup from the kitchen table", 48000), 48000, 16000)
-        engine = NemoTransducerRecognizer(tones)
+        engine = NemoRecognizer(tones)
         start = time.perf_counter()
         text = engine.transcribe(speech).text
         rtf = (time.perf_counter() - start) / (speech.size / 16000)

@@ -24,7 +24,7 @@ from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.config import SpeechEventConfig
 from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.engines import EngineBuilder
@@ -68,9 +68,7 @@ def answer_times(calls: int = 2000) -> None:
 def switch_with_build(name: str, directory: Path, runs: int = 5) -> None:
     times: List[float] = []
     for _ in range(runs):
-        _, bus, node = _node(
-            ToneRecognizer(), lambda language: NemoTransducerRecognizer(directory), ClockExecutor
-        )
+        _, bus, node = _node(ToneRecognizer(), lambda language: NemoRecognizer(directory), ClockExecutor)
         start = time.perf_counter()
         answer = bus.call(SET_LANGUAGE_SERVICE, SetLanguageRequest("Kinyarwanda"))
         times.append(time.perf_counter() - start)
@@ -86,8 +84,8 @@ def _worker_latencies(directory: Path, speech: np.ndarray, utterances: int, buil
     language once (building the Kinyarwanda engine) and builds builds - 1 more engines meanwhile."""
     executor = ThreadExecutor()
     clock, bus, node = _node(
-        NemoTransducerRecognizer(directory),
-        lambda language: NemoTransducerRecognizer(directory),
+        NemoRecognizer(directory),
+        lambda language: NemoRecognizer(directory),
         lambda _: executor,
     )
     closed: List[float] = []
@@ -97,7 +95,7 @@ def _worker_latencies(directory: Path, speech: np.ndarray, utterances: int, buil
     def switch() -> None:
         bus.call(SET_LANGUAGE_SERVICE, SetLanguageRequest("Kinyarwanda"))
         for _ in range(builds - 1):
-            NemoTransducerRecognizer(directory)
+            NemoRecognizer(directory)
 
     switcher = threading.Thread(target=switch)
     if builds:

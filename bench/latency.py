@@ -5,8 +5,9 @@
     pause (1.5 s), median and max of 3 runs, without and with speculative recognition. The blocks
     of an utterance are published at once (the latency counts from the last one); the speculation
     starts 0.3 s after it. Each run's node first transcribes the same utterance once, unmeasured,
-    as a node on the robot has (an engine that cannot be stopped speculates only once timed). Target with speculation: pause + 50 ms or less whenever recognition
-    takes less than the pause minus the gap (1.2 s).
+    as a node on the robot has (an engine that cannot be stopped speculates only once timed).
+    Target with speculation: pause + 50 ms or less whenever recognition takes less than the pause
+    minus the gap (1.2 s).
 (b) Early end of turn (early_pause 0.5 s): "yes" in the tones voice, time from the last block to the
     text (target 0.5 s).
 (c) Engine time spent on speculations that more speech made worthless, per hour of speech: 200
@@ -44,7 +45,7 @@ from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
@@ -122,7 +123,7 @@ def _engines(work: Path) -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
     return {
         "fake (tones)": (ToneRecognizer, "tones"),
         "NeMo engine, tones fixture model": (
-            lambda: NemoTransducerRecognizer(build_tones_model(work / "tones")),
+            lambda: NemoRecognizer(build_tones_model(work / "tones")),
             "tones",
         ),
         "pocketsphinx grammar": (lambda: SphinxRecognizer(grammar=grammar), "tts"),
@@ -136,7 +137,7 @@ def _large_conformer() -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
     if exported:
         return {
             "large conformer (119 M, random weights)": (
-                lambda: NemoTransducerRecognizer(Path(exported)),
+                lambda: NemoRecognizer(Path(exported)),
                 "tts",
             )
         }

@@ -1,27 +1,37 @@
 """Parity of the engine with NeMo itself (a tool, not CI): needs torch and nemo_toolkit.
 
     python3 -m venv /tmp/nemo && /tmp/nemo/bin/pip install torch==2.13.0 "nemo_toolkit[asr]"
-    PYTHONPATH=. /tmp/nemo/bin/python -m bench.nemo_parity
+    PYTHONPATH=. /tmp/nemo/bin/python -m bench.nemo_parity [NAME ...]  # default: every model below
 
-Builds a randomly initialised NeMo conformer-transducer of the large configuration (17 blocks,
-d_model 512) with a small SentencePiece tokenizer, saves it as .nemo, exports it with
-``speech-event export-nemo`` (NeMo's own exporter underneath), and checks that the engine's tokens
-equal NeMo's own greedy transcription of the same model on 10 audio files. Random weights give
-flat logits, so the joint's output layer is scaled up: near-ties must not decide the result.
-Also prints the engine's real-time factor on this large-size model.
+Builds randomly initialised NeMo models of realistic size with a small SentencePiece tokenizer,
+saves each as .nemo, exports it with ``speech-event export-nemo`` (NeMo's own exporter underneath)
+and checks that the engine gives NeMo's own transcription (``model.transcribe``, its default
+greedy_batch decoding) of the same model on 10 utterances: the same tokens, and the confidence
+(exp of NeMo's hypothesis score). The models:
+
+- conformer-rnnt: the conformer-transducer large (17 blocks, d_model 512, 4x striding);
+- fastconformer-hybrid: a FastConformer hybrid RNN-T/CTC (EncDecHybridRNNTCTCBPEModel, as the
+  robot loads Parakeet; 17 blocks, d_model 512, 8x depthwise striding), both heads exported;
+- fastconformer-tdt: a FastConformer TDT (EncDecRNNTBPEModel with TDT durations 0-4, as
+  Parakeet-TDT).
+
+Random weights give flat logits, so each output layer is scaled up (near-ties must not decide the
+result) and the blank biased so that blanks and emissions mix. Prints each engine's real-time
+factor on these models too. The exported directories are left under /tmp/speech_event_parity_*.
 """
 
+import dataclasses
 import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Dict, List
+from typing import Any, Callable, Dict, List, Tuple
 
 import numpy as np
 
 from fixtures.nemo_config import PREPROCESSOR
 from fixtures.tts import speak_tts
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.export_nemo import export
 
 SENTENCES = [
@@ -40,6 +50,8 @@ JOINT_OUTPUT_SCALE = 50.0
 # Scaled random logits always beat the blank; this bias on the blank makes blanks and emissions
 # mix, so the parity covers both paths of the decoding loop (and the max_symbols cap).
 BLANK_BIAS = 25.0
+CTC_BLANK_BIAS = 12.0
+DURATIONS = [0, 1, 2, 3, 4]
 
 
 def _tokenizer(directory: Path) -> Path:
@@ -61,37 +73,45 @@ def _tokenizer(directory: Path) -> Path:
     return directory
 
 
-def _large_config(tokenizer: Path) -> Dict[str, Any]:
+def _encoder(fast: bool) -> Dict[str, Any]:
+    """The large encoder: Conformer (4x striding, kernel 31) or FastConformer (8x depthwise
+    striding, kernel 9)."""
     return {
+        "_target_": "nemo.collections.asr.modules.ConformerEncoder",
+        "feat_in": 80,
+        "feat_out": -1,
+        "n_layers": 17,
+        "d_model": 512,
+        "subsampling": "dw_striding" if fast else "striding",
+        "subsampling_factor": 8 if fast else 4,
+        "subsampling_conv_channels": 256 if fast else -1,
+        "causal_downsampling": False,
+        "ff_expansion_factor": 4,
+        "self_attention_model": "rel_pos",
+        "n_heads": 8,
+        "att_context_size": [-1, -1],
+        "xscaling": True,
+        "untie_biases": True,
+        "pos_emb_max_len": 5000,
+        "conv_kernel_size": 9 if fast else 31,
+        "conv_norm_type": "batch_norm",
+        "dropout": 0.0,
+        "dropout_pre_encoder": 0.0,
+        "dropout_emb": 0.0,
+        "dropout_att": 0.0,
+    }
+
+
+def _config(tokenizer: Path, fast: bool, tdt: bool = False, hybrid: bool = False) -> Dict[str, Any]:
+    decoding: Dict[str, Any] = {"strategy": "greedy_batch", "greedy": {"max_symbols": 10}}
+    config: Dict[str, Any] = {
         "sample_rate": 16000,
         "labels": None,
         "model_defaults": {"enc_hidden": 512, "pred_hidden": 640, "joint_hidden": 640},
         "tokenizer": {"dir": str(tokenizer), "type": "bpe"},
         "preprocessor": PREPROCESSOR,
         "spec_augment": None,
-        "encoder": {
-            "_target_": "nemo.collections.asr.modules.ConformerEncoder",
-            "feat_in": 80,
-            "feat_out": -1,
-            "n_layers": 17,
-            "d_model": 512,
-            "subsampling": "striding",
-            "subsampling_factor": 4,
-            "subsampling_conv_channels": -1,
-            "ff_expansion_factor": 4,
-            "self_attention_model": "rel_pos",
-            "n_heads": 8,
-            "att_context_size": [-1, -1],
-            "xscaling": True,
-            "untie_biases": True,
-            "pos_emb_max_len": 5000,
-            "conv_kernel_size": 31,
-            "conv_norm_type": "batch_norm",
-            "dropout": 0.0,
-            "dropout_pre_encoder": 0.0,
-            "dropout_emb": 0.0,
-            "dropout_att": 0.0,
-        },
+        "encoder": _encoder(fast),
         "decoder": {
             "_target_": "nemo.collections.asr.modules.RNNTDecoder",
             "normalization_mode": None,
@@ -106,10 +126,32 @@ def _large_config(tokenizer: Path) -> Dict[str, Any]:
             "fuse_loss_wer": False,
             "jointnet": {"joint_hidden": 640, "activation": "relu", "dropout": 0.0},
         },
-        "decoding": {"strategy": "greedy", "greedy": {"max_symbols": 10}},
+        "decoding": decoding,
         "loss": {"loss_name": "default"},
         "optim": None,
     }
+    if tdt:
+        config["model_defaults"].update(tdt_durations=DURATIONS, num_tdt_durations=len(DURATIONS))
+        config["joint"]["num_extra_outputs"] = len(DURATIONS)
+        config["loss"] = {
+            "loss_name": "tdt",
+            "tdt_kwargs": {"durations": DURATIONS, "sigma": 0.02, "omega": 0.1},
+        }
+        decoding.update(model_type="tdt", durations=DURATIONS)
+    if hybrid:
+        config["aux_ctc"] = {
+            "ctc_loss_weight": 0.3,
+            "use_cer": False,
+            "ctc_reduction": "mean_batch",
+            "decoder": {
+                "_target_": "nemo.collections.asr.modules.ConvASRDecoder",
+                "feat_in": None,
+                "num_classes": -1,
+                "vocabulary": [],
+            },
+            "decoding": {"strategy": "greedy_batch"},
+        }
+    return config
 
 
 def _as_16_bit(audio: np.ndarray) -> np.ndarray:
@@ -118,61 +160,122 @@ def _as_16_bit(audio: np.ndarray) -> np.ndarray:
     return pcm.astype(np.float32) / 32768.0
 
 
-def _nemo_greedy_tokens(model: Any, samples: np.ndarray) -> List[int]:
-    """NeMo's own preprocessor, encoder and greedy RNN-T decoding (what transcribe() runs)."""
-    import torch
+@dataclasses.dataclass(frozen=True)
+class Case:
+    """A model to build, and the heads of it to export and compare."""
 
-    with torch.no_grad():
-        signal = torch.tensor(samples, dtype=torch.float32)[None]
-        length = torch.tensor([samples.size])
-        features, feature_length = model.preprocessor(input_signal=signal, length=length)
-        encoded, encoded_length = model.encoder(audio_signal=features, length=feature_length)
-        hypotheses = model.decoding.rnnt_decoder_predictions_tensor(
-            encoder_output=encoded, encoded_lengths=encoded_length, return_hypotheses=True
-        )
-    if isinstance(hypotheses, tuple):  # older NeMo: (best, all)
-        hypotheses = hypotheses[0]
-    return [int(token) for token in hypotheses[0].y_sequence]
+    build: Callable[[Path], Any]
+    heads: Tuple[str, ...] = ("rnnt",)
 
 
-def main() -> int:
-    import torch
+def _conformer_rnnt(tokenizer: Path) -> Any:
     from nemo.collections.asr.models import EncDecRNNTBPEModel
     from omegaconf import OmegaConf
 
-    torch.manual_seed(0)
-    work = Path(tempfile.mkdtemp(prefix="speech_event_parity_"))
-    model = EncDecRNNTBPEModel(cfg=OmegaConf.create(_large_config(_tokenizer(work))))
+    return EncDecRNNTBPEModel(cfg=OmegaConf.create(_config(tokenizer, fast=False)))
+
+
+def _fastconformer_hybrid(tokenizer: Path) -> Any:
+    from nemo.collections.asr.models import EncDecHybridRNNTCTCBPEModel
+    from omegaconf import OmegaConf
+
+    return EncDecHybridRNNTCTCBPEModel(cfg=OmegaConf.create(_config(tokenizer, fast=True, hybrid=True)))
+
+
+def _fastconformer_tdt(tokenizer: Path) -> Any:
+    from nemo.collections.asr.models import EncDecRNNTBPEModel
+    from omegaconf import OmegaConf
+
+    return EncDecRNNTBPEModel(cfg=OmegaConf.create(_config(tokenizer, fast=True, tdt=True)))
+
+
+CASES: Dict[str, Case] = {
+    "conformer-rnnt": Case(_conformer_rnnt),
+    "fastconformer-hybrid": Case(_fastconformer_hybrid, ("rnnt", "ctc")),
+    "fastconformer-tdt": Case(_fastconformer_tdt),
+}
+
+
+def _biased(model: Any) -> None:
+    """Scale the output layers up and bias their blanks (the blank is the last token, before TDT's
+    durations)."""
+    import torch
+
     with torch.no_grad():
         output_layer = model.joint.joint_net[-1]
         output_layer.weight.mul_(JOINT_OUTPUT_SCALE)
-        output_layer.bias[-1] += BLANK_BIAS
-    model.eval()
-    parameters = sum(p.numel() for p in model.parameters())
-    nemo_file = work / "random_large.nemo"
-    model.save_to(str(nemo_file))
-    start = time.perf_counter()
-    export(nemo_file, work / "exported")
-    print(f"model: {parameters / 1e6:.1f} M parameters; exported in {time.perf_counter() - start:.1f} s")
+        output_layer.bias[model.joint.num_classes_with_blank - 1] += BLANK_BIAS
+        if hasattr(model, "ctc_decoder"):
+            ctc_layer = model.ctc_decoder.decoder_layers[0]
+            ctc_layer.weight.mul_(JOINT_OUTPUT_SCALE)
+            ctc_layer.bias[-1] += CTC_BLANK_BIAS
 
-    engine = NemoTransducerRecognizer(work / "exported")
-    audio = [_as_16_bit(speak_tts(sentence, 16000)) for sentence in SENTENCES]
-    matches = 0
+
+def _nemo_hypotheses(model: Any, audio: List[np.ndarray], head: str) -> List[Any]:
+    """NeMo's own transcription (its preprocessor, encoder and default greedy decoding)."""
+    if head == "ctc":
+        model.change_decoding_strategy(decoder_type="ctc", verbose=False)
+    elif hasattr(model, "ctc_decoder"):
+        model.change_decoding_strategy(decoder_type="rnnt", verbose=False)
+    hypotheses = model.transcribe(audio, batch_size=1, return_hypotheses=True, verbose=False)
+    if isinstance(hypotheses, tuple):  # older NeMo: (best, all)
+        hypotheses = hypotheses[0]
+    return list(hypotheses)
+
+
+def _compare(name: str, exported: Path, hypotheses: List[Any], audio: List[np.ndarray]) -> bool:
+    engine = NemoRecognizer(exported)
+    matches, worst_confidence = 0, 0.0
     busy = seconds = 0.0
-    for sentence, samples in zip(SENTENCES, audio):
-        theirs = _nemo_greedy_tokens(model, samples)
+    for sentence, samples, theirs in zip(SENTENCES, audio, hypotheses):
         started = time.perf_counter()
-        ours = engine.token_ids(samples)
+        ours = engine.hypothesis(samples)
         busy += time.perf_counter() - started
         seconds += samples.size / 16000
-        matches += ours == theirs
-        frames = int(np.ceil(samples.size / 160 / 4))
-        verdict = "same" if ours == theirs else "DIFFERENT"
-        print(f"{sentence!r}: {verdict} ({len(theirs)} tokens from NeMo, about {frames} encoder frames)")
-    print(f"parity: {matches} of {len(SENTENCES)} utterances give NeMo's own tokens")
-    print(f"engine RTF on the large-size random model: {busy / seconds:.3f} ({seconds:.1f} s of audio)")
-    return 0 if matches == len(SENTENCES) else 1
+        tokens = [int(token) for token in theirs.y_sequence]
+        same = ours.tokens == tokens
+        matches += same
+        difference = abs(ours.confidence - float(np.exp(float(theirs.score))))
+        worst_confidence = max(worst_confidence, difference)
+        print(
+            f"  {sentence!r}: {'same' if same else 'DIFFERENT'} ({len(tokens)} tokens from NeMo; "
+            f"confidence {ours.confidence:.4g}, NeMo's {np.exp(float(theirs.score)):.4g})"
+        )
+    print(f"{name}: {matches} of {len(SENTENCES)} utterances give NeMo's own tokens; ", end="")
+    print(
+        f"confidence differs by {worst_confidence:.2g} at most; engine RTF {busy / seconds:.3f}", flush=True
+    )
+    return matches == len(SENTENCES)
+
+
+def main(names: List[str]) -> int:
+    import torch
+
+    work = Path(tempfile.mkdtemp(prefix="speech_event_parity_"))
+    tokenizer = _tokenizer(work)
+    audio = [_as_16_bit(speak_tts(sentence, 16000)) for sentence in SENTENCES]
+    all_same = True
+    for name in names or list(CASES):
+        torch.manual_seed(0)
+        case = CASES[name]
+        model = case.build(tokenizer)
+        _biased(model)
+        model.eval()
+        parameters = sum(p.numel() for p in model.parameters())
+        nemo_file = work / f"{name}.nemo"
+        model.save_to(str(nemo_file))
+        for head in case.heads:
+            exported = work / f"{name}-{head}"
+            start = time.perf_counter()
+            manifest = export(nemo_file, exported, head)
+            print(
+                f"{name} ({head} head): {parameters / 1e6:.1f} M parameters, exported in "
+                f"{time.perf_counter() - start:.1f} s as {manifest.family}, {manifest.decoding}, "
+                f"subsampling {manifest.subsampling_factor}, to {exported}"
+            )
+            all_same &= _compare(f"{name} ({head})", exported, _nemo_hypotheses(model, audio, head), audio)
+    return 0 if all_same else 1
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))

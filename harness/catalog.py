@@ -41,8 +41,10 @@ VOICES: Dict[str, Voice] = {
 }
 
 FIXTURE_MODEL = "fixture-model"
-# The node's engines, plus the tones transducer built at test time (fixtures/tones_model.py).
-RECOGNIZERS = (*ENGINES, FIXTURE_MODEL)
+FIXTURE_PARAKEET = "fixture-parakeet"
+# The node's engines, plus the tones models built at test time (fixtures/tones_model.py): the
+# conformer-transducer's RNN-T and the parakeet family's TDT format.
+RECOGNIZERS = (*ENGINES, FIXTURE_MODEL, FIXTURE_PARAKEET)
 # A model path written so in a scenario's [config] is a model built at test time.
 FIXTURE_PREFIX = "fixture:"
 FIXTURE_TONES = "fixture:tones"
@@ -52,6 +54,12 @@ def _tones_model() -> str:
     from fixtures.tones_model import tones_model_directory
 
     return str(tones_model_directory())
+
+
+def _tones_tdt_model() -> str:
+    from fixtures.tones_model import tones_tdt_model_directory
+
+    return str(tones_tdt_model_directory())
 
 
 def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
@@ -65,14 +73,17 @@ def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
 def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventConfig]:
     """The node's engine name and configuration for a scenario's recognizer.
 
-    The fixture model is a real model directory: the node loads it as its NeMo model of both
-    languages (as the fake serves both), in memory and on ROS alike.
+    A fixture model is a real model directory: the node loads it as its NeMo model of both
+    languages (as the fake serves both), of its family, in memory and on ROS alike.
     """
     config = _fixture_paths(config)
-    if name != FIXTURE_MODEL:
-        return name, config
-    tones = _tones_model()
-    return "nemo", dataclasses.replace(config, en_model_path=tones, rw_model_path=tones)
+    if name == FIXTURE_MODEL:
+        tones = _tones_model()
+        return "nemo", dataclasses.replace(config, en_model_path=tones, rw_model_path=tones)
+    if name == FIXTURE_PARAKEET:
+        tdt = _tones_tdt_model()
+        return "nemo", dataclasses.replace(config, model="parakeet", en_model_path=tdt, rw_model_path=tdt)
+    return name, config
 
 
 def recognizer_for(name: str, config: SpeechEventConfig) -> Recognizer:

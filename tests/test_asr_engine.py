@@ -17,11 +17,11 @@ from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
 from fixtures.transducer_model import build_random_transducer
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.errors import ModelError
 from speech_event.asr.features import FeatureSettings, features, log_mel
-from speech_event.asr.greedy import greedy_decode
 from speech_event.asr.model import providers
+from speech_event.asr.rnnt_greedy import rnnt_greedy
 from speech_event.asr.vocabulary import Vocabulary, load_vocabulary
 from speech_event.resample import resample
 
@@ -72,7 +72,7 @@ def test_greedy_decoding_emits_until_blank_caps_symbols_and_updates_state_only_o
         logits[script[(int(frame[0]), last)]] = 1.0
         return logits, state + 1
 
-    tokens = greedy_decode(np.array([[0.0], [1.0], [2.0]]), step, 0, blank, max_symbols=3)
+    tokens = rnnt_greedy(np.array([[0.0], [1.0], [2.0]]), step, 0, blank, max_symbols=3).tokens
     assert tokens == [1, 2, 0, 0, 0]
     # the state moves on only when a token is emitted; a blank leaves it as it was
     assert calls == [(0, 3, 0), (0, 1, 1), (0, 2, 2), (1, 2, 2), (1, 0, 3), (1, 0, 4), (2, 0, 5)]
@@ -109,27 +109,30 @@ def random_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_engine_gives_the_same_text_as_onnx_asr_on_the_same_model(random_model: Path, seed: int) -> None:
-    ours = NemoTransducerRecognizer(random_model)
+    ours = NemoRecognizer(random_model)
     theirs = onnx_asr.load_model("nemo-conformer-rnnt", random_model)
     rng = np.random.default_rng(seed)
-    audio = np.concatenate([noise(8000, -30.0, rng), resample(speak_tones("muraho", 48000), 48000, 16000)])
+    audio = np.concatenate([noise(16000, -30.0, rng), resample(speak_tones("muraho", 48000), 48000, 16000)])
     text = ours.transcribe(audio).text
     assert text != ""
     assert text == theirs.recognize(audio)
 
 
-def test_silence_shorter_than_a_frame_transcribes_to_nothing(random_model: Path) -> None:
-    assert NemoTransducerRecognizer(random_model).transcribe(np.zeros(100, np.float32)).text == ""
+def test_audio_shorter_than_a_frame_is_transcribed_as_a_second_of_it_as_nemo_does(random_model: Path) -> None:
+    engine = NemoRecognizer(random_model)
+    assert engine.hypothesis(np.zeros(100, np.float32)) == engine.hypothesis(np.zeros(16000, np.float32))
+    assert engine.hypothesis(np.zeros(0, np.float32)) == engine.hypothesis(np.zeros(16000, np.float32))
 
 
 def test_a_missing_model_file_is_named_with_what_a_model_directory_holds(tmp_path: Path) -> None:
     model = build_random_transducer(tmp_path / "model")
     (model / "decoder_joint-model.onnx").unlink()
     with pytest.raises(ModelError) as error:
-        NemoTransducerRecognizer(model)
+        NemoRecognizer(model)
     assert str(error.value) == (
         f"{model}: missing decoder_joint-model.onnx; a model directory holds encoder-model.onnx, "
-        "decoder_joint-model.onnx, vocab.txt and config.json (speech-event export-nemo MODEL.nemo DIR writes one)"
+        "decoder_joint-model.onnx (a transducer) or model.onnx (CTC), vocab.txt and config.json "
+        "(speech-event export-nemo MODEL.nemo DIR writes one)"
     )
 
 
@@ -141,10 +144,10 @@ def test_wrong_tensor_names_are_named_with_the_expected_ones(tmp_path: Path) -> 
         node.input[:] = ["audio_length" if name == "length" else name for name in node.input]
     onnx.save(encoder, str(model / "encoder-model.onnx"))
     with pytest.raises(ModelError) as error:
-        NemoTransducerRecognizer(model)
+        NemoRecognizer(model)
     assert str(error.value) == (
         f"{model / 'encoder-model.onnx'}: inputs are ['audio_length', 'audio_signal'] (missing length); "
-        "a NeMo transducer export has audio_signal (3-D), length (1-D)"
+        "encoder-model.onnx of a NeMo export has audio_signal (3-D), length (1-D)"
     )
 
 
@@ -152,7 +155,7 @@ def test_a_nemo_archive_given_directly_says_how_to_export_it(tmp_path: Path) -> 
     archive = tmp_path / "stt_rw_conformer_transducer_large.nemo"
     archive.write_bytes(b"")
     with pytest.raises(ModelError) as error:
-        NemoTransducerRecognizer(archive)
+        NemoRecognizer(archive)
     assert str(error.value) == (
         f"{archive} is a .nemo archive, not an exported model directory: export it once with "
         f"'speech-event export-nemo {archive} OUT_DIR' (needs the 'export' extra: nemo_toolkit), then give OUT_DIR"
@@ -164,7 +167,7 @@ def test_cuda_without_a_cuda_onnxruntime_warns_and_runs_on_the_cpu(
 ) -> None:
     assert providers(cuda=False) == ["CPUExecutionProvider"]
     with caplog.at_level(logging.WARNING, logger="speech_event"):
-        recognizer = NemoTransducerRecognizer(random_model, cuda=True)
+        recognizer = NemoRecognizer(random_model, cuda=True)
     assert recognizer.transcribe(noise(16000, -20.0, np.random.default_rng(0))).text != ""
     assert caplog.messages == [
         "cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU"
@@ -172,7 +175,7 @@ def test_cuda_without_a_cuda_onnxruntime_warns_and_runs_on_the_cpu(
 
 
 def test_cancel_stops_a_running_transcription_and_the_next_one_runs(random_model: Path) -> None:
-    engine = NemoTransducerRecognizer(random_model)
+    engine = NemoRecognizer(random_model)
     long_audio = noise(16000 * 120, -20.0, np.random.default_rng(5))
     failures: List[BaseException] = []
 
@@ -193,4 +196,4 @@ def test_cancel_stops_a_running_transcription_and_the_next_one_runs(random_model
     speech = resample(speak_tones("muraho", 48000), 48000, 16000)
     after = engine.transcribe(speech).text  # the cancel was for that run only
     assert after != ""
-    assert after == NemoTransducerRecognizer(random_model).transcribe(speech).text
+    assert after == NemoRecognizer(random_model).transcribe(speech).text

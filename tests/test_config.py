@@ -246,18 +246,29 @@ def test_the_robots_new_keys_are_checked(line: str, message: str) -> None:
     assert str(error.value) == f"robot.ini:1: {message}"
 
 
-@pytest.mark.parametrize("family", ["parakeet", "whisper"])
-def test_a_model_family_without_an_engine_yet_stops_the_node_with_status_2(
-    tmp_path: Path, family: str
+@pytest.mark.parametrize(
+    ("family", "message"),
+    [
+        (
+            "whisper",
+            "model whisper: this release runs the conformer-transducer and parakeet families; "
+            "the whisper engine is not available yet",
+        ),
+        (
+            "parakeet",
+            "language english with model parakeet needs en_model_path: the directory of an exported NeMo "
+            "model (speech-event export-nemo MODEL.nemo DIR writes one)",
+        ),
+    ],
+)
+def test_a_model_family_the_node_cannot_run_as_configured_stops_it_with_status_2(
+    tmp_path: Path, family: str, message: str
 ) -> None:
     robot = tmp_path / "robot.ini"
     robot.write_text(ROBOT_V1_1.read_text().replace("conformer-transducer", family))
     result = run_application("-c", str(robot))
     assert result.returncode == 2
-    assert result.stderr == (
-        f"error: model {family}: this release runs only the conformer-transducer family "
-        f"(model conformer-transducer); the {family} engine is not available yet\n"
-    )
+    assert result.stderr == f"error: {message}\n"
 
 
 def test_vad_threshold_without_the_silero_model_stops_the_node_saying_how_to_install_it(

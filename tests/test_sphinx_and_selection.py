@@ -7,7 +7,7 @@ import pytest
 
 from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.errors import ModelError
 from speech_event.config import SpeechEventConfig
 from speech_event.recognizers import RECOGNIZERS
@@ -74,9 +74,9 @@ def test_auto_picks_pocketsphinx_for_english_without_a_model_and_nemo_with_one(t
     assert isinstance(RECOGNIZERS["auto"](SpeechEventConfig()), SphinxRecognizer)
     model = build_random_transducer(tmp_path / "en")
     chosen = RECOGNIZERS["auto"](SpeechEventConfig(en_model_path=str(model)))
-    assert isinstance(chosen, NemoTransducerRecognizer)
+    assert isinstance(chosen, NemoRecognizer)
     rw = RECOGNIZERS["auto"](SpeechEventConfig(language="kinyarwanda", rw_model_path=str(model)))
-    assert isinstance(rw, NemoTransducerRecognizer)
+    assert isinstance(rw, NemoRecognizer)
     assert (
         rw.transcribe(np.zeros(16000, np.float32)).text == chosen.transcribe(np.zeros(16000, np.float32)).text
     )

@@ -15,25 +15,19 @@ from fixtures.tones_model import SETTINGS, build_tones_model, tones_model_direct
 from harness.memory_runner import run_in_memory
 from harness.report import passed, report
 from harness.scenario import load_scenario
-from speech_event.asr.engine import NemoTransducerRecognizer
+from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.features import features
 from speech_event.config import SpeechEventConfig
 from speech_event.resample import resample
+from tests.scenario_files import TONES_SCENARIOS
 from tests.strategies import TONES_TEXT
 
 ROOT = Path(__file__).resolve().parents[1]
-TONES_SCENARIOS = [
-    path
-    for path in sorted((ROOT / "scenarios").glob("*.toml"))
-    # the tones scenarios written for the fake (others name the engine they need)
-    if load_scenario(path, SpeechEventConfig()).voice == "tones"
-    and load_scenario(path, SpeechEventConfig()).recognizer == "fake"
-]
 
 
 @pytest.fixture(scope="module")
-def engine() -> NemoTransducerRecognizer:
-    return NemoTransducerRecognizer(tones_model_directory())
+def engine() -> NemoRecognizer:
+    return NemoRecognizer(tones_model_directory())
 
 
 def test_it_is_built_in_nemo_s_export_layout(tmp_path: Path) -> None:
@@ -49,7 +43,7 @@ def test_it_is_built_in_nemo_s_export_layout(tmp_path: Path) -> None:
 @settings(max_examples=40, deadline=None)
 @given(text=TONES_TEXT, seed=st.integers(0, 2**16), level_db=st.sampled_from([-60.0, -45.0, -40.0]))
 def test_any_text_round_trips_through_the_real_engine(
-    engine: NemoTransducerRecognizer, text: str, seed: int, level_db: float
+    engine: NemoRecognizer, text: str, seed: int, level_db: float
 ) -> None:
     spoken = speak_tones(text, 48000)
     noisy = spoken + noise(spoken.size, level_db, np.random.default_rng(seed))
@@ -58,17 +52,16 @@ def test_any_text_round_trips_through_the_real_engine(
 
 @given(seed=st.integers(0, 2**16), seconds=st.floats(0.1, 3.0))
 @settings(max_examples=20, deadline=None)
-def test_noise_alone_transcribes_to_nothing(
-    engine: NemoTransducerRecognizer, seed: int, seconds: float
-) -> None:
+def test_noise_alone_transcribes_to_nothing(engine: NemoRecognizer, seed: int, seconds: float) -> None:
     assert engine.transcribe(noise(int(seconds * 16000), -40.0, np.random.default_rng(seed))).text == ""
 
 
+@pytest.mark.parametrize("model", ["fixture-model", "fixture-parakeet"])
 @pytest.mark.parametrize("path", TONES_SCENARIOS, ids=[path.stem for path in TONES_SCENARIOS])
-def test_every_tones_scenario_passes_with_the_fixture_model_as_with_the_fake(path: Path) -> None:
+def test_every_tones_scenario_passes_with_the_fixture_models_as_with_the_fake(path: Path, model: str) -> None:
     scenario = load_scenario(path, SpeechEventConfig())
     with_fake = run_in_memory(dataclasses.replace(scenario, recognizer="fake"))
-    with_model = run_in_memory(dataclasses.replace(scenario, recognizer="fixture-model"))
+    with_model = run_in_memory(dataclasses.replace(scenario, recognizer=model))
     assert passed(scenario, with_model), report(scenario, with_model)
     assert with_model == with_fake  # the same messages, responses and results at the same times
 
@@ -84,9 +77,7 @@ class _OurFeatures:
 
 
 @pytest.mark.parametrize("text", ["go to the kitchen", "mmm i'll see you", "a b c d e f g"])
-def test_onnx_asr_decodes_the_fixture_model_to_the_same_text(
-    engine: NemoTransducerRecognizer, text: str
-) -> None:
+def test_onnx_asr_decodes_the_fixture_model_to_the_same_text(engine: NemoRecognizer, text: str) -> None:
     audio = resample(speak_tones(text, 48000), 48000, 16000)
     reference = onnx_asr.load_model("nemo-conformer-rnnt", tones_model_directory())
     # onnx-asr's preprocessor computes the conformer features; this model asks for other ones, so

@@ -1,29 +1,46 @@
-"""The NeMo conformer-transducer recognizer: features -> encoder -> greedy RNN-T -> vocabulary.
+"""The NeMo families (conformer-transducer, parakeet) on onnxruntime: features -> encoder ->
+greedy decoding (RNN-T, TDT or CTC, as the directory's config.json says) -> vocabulary.
 
 ``cancel`` stops a running ``transcribe`` from another thread (onnxruntime's RunOptions.terminate):
-the node's recognition_timeout uses it, so a hung recognition does not hold up the next one.
+the node's recognition_timeout and speculative recognition use it.
 """
 
 import functools
 from pathlib import Path
-from typing import List, Optional, Union
+from typing import Optional, Union
 
 import numpy as np
 import onnxruntime
 
+from speech_event.asr.ctc_greedy import ctc_greedy
 from speech_event.asr.errors import ModelError
 from speech_event.asr.features import features
-from speech_event.asr.greedy import greedy_decode
-from speech_event.asr.manifest import MANIFEST_FILE, load_manifest
-from speech_event.asr.model import TransducerModel
-from speech_event.asr.vocabulary import load_vocabulary
+from speech_event.asr.hypothesis import Hypothesis
+from speech_event.asr.manifest import CTC, MANIFEST_FILE, TDT, Manifest, load_manifest
+from speech_event.asr.model import CtcModel, TransducerModel
+from speech_event.asr.rnnt_greedy import rnnt_greedy
+from speech_event.asr.tdt_greedy import tdt_greedy
+from speech_event.asr.vocabulary import Vocabulary, load_vocabulary
 from speech_event.ports import Transcript
 
 VOCABULARY_FILE = "vocab.txt"
+# NeMo's transcribe() pads audio shorter than a second with silence, half before and half after
+# (its pad_min_duration and pad_direction defaults): the same audio gives the same tokens only so.
+PAD_MIN_SECONDS = 1.0
 
 
-class NemoTransducerRecognizer:
-    def __init__(self, model_directory: Union[str, Path], cuda: bool = False) -> None:
+def padded_as_nemo_does(audio: np.ndarray, sample_rate: int) -> np.ndarray:
+    missing = int(PAD_MIN_SECONDS * sample_rate) - audio.size
+    if missing <= 0:
+        return audio
+    return np.pad(audio, (missing // 2, missing - missing // 2))
+
+
+class NemoRecognizer:
+    def __init__(
+        self, model_directory: Union[str, Path], cuda: bool = False, family: Optional[str] = None
+    ) -> None:
+        """``family``: the robot's ``model`` setting, when the directory must be of that family."""
         directory = Path(model_directory)
         if directory.suffix == ".nemo":
             raise ModelError(
@@ -34,34 +51,56 @@ class NemoTransducerRecognizer:
         if not directory.is_dir():
             raise ModelError(f"{directory}: no such model directory")
         self._manifest = load_manifest(directory / MANIFEST_FILE)
+        if family is not None and self._manifest.family != family:
+            raise ModelError(
+                f"{directory} holds a {self._manifest.family} model ({MANIFEST_FILE}: family), but model "
+                f"is {family}: set model {self._manifest.family}, or give a directory exported from a "
+                f"{family} model"
+            )
         self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
-        self._model = TransducerModel(directory, cuda)
+        self._model: Union[CtcModel, TransducerModel] = (
+            CtcModel(directory, cuda) if self._manifest.decoding == CTC else TransducerModel(directory, cuda)
+        )
+        _check_logits(directory, self._model.logits_size, self._vocabulary, self._manifest)
         self._run: Optional[onnxruntime.RunOptions] = None  # the options of the transcribe running now
 
     @property
     def sample_rate(self) -> int:
         return self._manifest.features.sample_rate
 
-    def token_ids(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> List[int]:
-        """The greedy token ids for 16 kHz ``audio``, before the vocabulary turns them to text."""
-        inputs = features(audio, self._manifest.features)
-        if inputs.shape[1] == 0:
-            return []
-        return greedy_decode(
-            self._model.encode(inputs, run),
-            functools.partial(self._model.step, run=run),
-            self._model.initial_state(),
-            self._vocabulary.blank,
-            self._manifest.max_symbols_per_step,
-        )
+    def hypothesis(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> Hypothesis:
+        """The greedy token ids and score for 16 kHz ``audio``, before the vocabulary turns them to text."""
+        inputs = features(padded_as_nemo_does(audio, self.sample_rate), self._manifest.features)
+        manifest, blank = self._manifest, self._vocabulary.blank
+        if isinstance(self._model, CtcModel):
+            return ctc_greedy(self._model.logits(inputs, run), blank)
+        frames = self._model.encode(inputs, run)
+        step = functools.partial(self._model.step, run=run)
+        state = self._model.initial_state()
+        if manifest.decoding == TDT:
+            return tdt_greedy(frames, step, state, blank, manifest.durations, manifest.max_symbols_per_step)
+        return rnnt_greedy(frames, step, state, blank, manifest.max_symbols_per_step)
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = onnxruntime.RunOptions()
         self._run = run
-        return Transcript(self._vocabulary.text(self.token_ids(audio, run)))
+        found = self.hypothesis(audio, run)
+        return Transcript(self._vocabulary.text(found.tokens), found.confidence)
 
     def cancel(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""
         run = self._run
         if run is not None:
             run.terminate = True
+
+
+def _check_logits(directory: Path, size: Optional[int], vocabulary: Vocabulary, manifest: Manifest) -> None:
+    """The model's logits per step must be the vocabulary's tokens (and TDT's durations)."""
+    expected = vocabulary.size + len(manifest.durations if manifest.decoding == TDT else ())
+    if size is not None and size != expected:
+        durations = f" and {len(manifest.durations)} durations" if manifest.decoding == TDT else ""
+        raise ModelError(
+            f"{directory}: the model gives {size} logits per step, but {VOCABULARY_FILE} has "
+            f"{vocabulary.size} tokens (blank included){durations} in {MANIFEST_FILE}: "
+            "the files are not of one export"
+        )

@@ -1,11 +1,14 @@
-"""The two ONNX files of NeMo's transducer export, run with onnxruntime.
+"""The ONNX files of NeMo's exports, run with onnxruntime.
 
+A transducer (RNN-T or TDT) is two files:
 ``encoder-model.onnx``: ``audio_signal`` float32 [B, features, T] and ``length`` int64 [B] ->
 ``outputs`` [B, D, T'] and ``encoded_lengths`` [B].
 ``decoder_joint-model.onnx``: ``encoder_outputs`` [B, D, 1], ``targets`` int32 [B, 1],
 ``target_length`` int32 [B], ``input_states_1`` and ``input_states_2`` (LSTM h and c, [layers, B,
-hidden]) -> ``outputs`` (logits, last dimension V + 1), ``prednet_lengths``, ``output_states_1``,
-``output_states_2``.
+hidden]) -> ``outputs`` (logits, last dimension V + 1, then TDT's durations), ``prednet_lengths``,
+``output_states_1``, ``output_states_2``.
+A CTC model (or a hybrid model's CTC head) is one file, ``model.onnx``: ``audio_signal`` and
+``length`` as above -> ``logprobs`` [B, T', V + 1].
 """
 
 import logging
@@ -21,6 +24,8 @@ _LOG = logging.getLogger("speech_event")
 
 ENCODER_FILE = "encoder-model.onnx"
 DECODER_JOINT_FILE = "decoder_joint-model.onnx"
+CTC_FILE = "model.onnx"
+CTC_OUTPUTS = {"logprobs": 3}
 ENCODER_INPUTS = {"audio_signal": 3, "length": 1}
 ENCODER_OUTPUTS = {"outputs": 3, "encoded_lengths": 1}
 DECODER_INPUTS = {
@@ -61,7 +66,7 @@ def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected
         problem = f"missing {', '.join(missing)}" if missing else "; ".join(wrong_rank)
         raise ModelError(
             f"{path}: {kind} are {sorted(shapes)} ({problem}); "
-            f"a NeMo transducer export has {_describe(expected)}"
+            f"{path.name} of a NeMo export has {_describe(expected)}"
         )
 
 
@@ -69,7 +74,7 @@ def _session(path: Path, execution_providers: List[str]) -> onnxruntime.Inferenc
     if not path.is_file():
         raise ModelError(
             f"{path.parent}: missing {path.name}; a model directory holds {ENCODER_FILE}, "
-            f"{DECODER_JOINT_FILE}, vocab.txt and config.json "
+            f"{DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), vocab.txt and config.json "
             "(speech-event export-nemo MODEL.nemo DIR writes one)"
         )
     options = onnxruntime.SessionOptions()
@@ -92,6 +97,12 @@ class TransducerModel:
         _check(decoder_path, "outputs", self._decoder_joint.get_outputs(), DECODER_OUTPUTS)
         states = {arg.name: arg.shape for arg in self._decoder_joint.get_inputs()}
         self._state_shapes = [states["input_states_1"], states["input_states_2"]]
+
+    @property
+    def logits_size(self) -> Optional[int]:
+        """The decoder-joint's logits per step when the file says (V + 1, plus TDT's durations)."""
+        size = next(arg.shape[-1] for arg in self._decoder_joint.get_outputs() if arg.name == "outputs")
+        return size if isinstance(size, int) else None
 
     def encode(self, features: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> np.ndarray:
         """[features, T] -> encoder frames [T', D]. ``run.terminate`` stops it (it raises)."""
@@ -128,3 +139,28 @@ class TransducerModel:
             run,
         )
         return np.asarray(logits).reshape(-1), (h, c)
+
+
+class CtcModel:
+    def __init__(self, directory: Path, cuda: bool) -> None:
+        path = directory / CTC_FILE
+        self._model = _session(path, providers(cuda))
+        _check(path, "inputs", self._model.get_inputs(), ENCODER_INPUTS)
+        _check(path, "outputs", self._model.get_outputs(), CTC_OUTPUTS)
+
+    @property
+    def logits_size(self) -> Optional[int]:
+        size = self._model.get_outputs()[0].shape[-1]
+        return size if isinstance(size, int) else None
+
+    def logits(self, features: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> np.ndarray:
+        """[features, T] -> per-frame log-probabilities [T', V + 1]."""
+        (logprobs,) = self._model.run(
+            ["logprobs"],
+            {
+                "audio_signal": features[None].astype(np.float32),
+                "length": np.array([features.shape[1]], np.int64),
+            },
+            run,
+        )
+        return np.asarray(logprobs[0])

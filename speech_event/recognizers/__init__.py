@@ -17,26 +17,30 @@ from speech_event.recognizers.tones import ToneRecognizer
 RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
 
 
-def _conformer_transducer_only(config: SpeechEventConfig) -> None:
-    if config.model != "conformer-transducer":
+NEMO_FAMILIES = ("conformer-transducer", "parakeet")
+
+
+def _nemo_family(config: SpeechEventConfig) -> None:
+    if config.model not in NEMO_FAMILIES:
         raise ModelError(
-            f"model {config.model}: this release runs only the conformer-transducer family "
-            f"(model conformer-transducer); the {config.model} engine is not available yet"
+            f"model {config.model}: this release runs the conformer-transducer and parakeet families; "
+            f"the {config.model} engine is not available yet"
         )
 
 
 def nemo(config: SpeechEventConfig) -> Recognizer:
-    from speech_event.asr.engine import NemoTransducerRecognizer
+    """The exported NeMo model of the configured language, of the family ``model`` names."""
+    from speech_event.asr.engine import NemoRecognizer
 
-    _conformer_transducer_only(config)
+    _nemo_family(config)
     key = "rw_model_path" if config.language == "kinyarwanda" else "en_model_path"
     path = getattr(config, key)
     if not path:
         raise ModelError(
-            f"language {config.language} needs {key}: the directory of an exported NeMo transducer "
-            "(speech-event export-nemo MODEL.nemo DIR writes one)"
+            f"language {config.language} with model {config.model} needs {key}: the directory of an "
+            "exported NeMo model (speech-event export-nemo MODEL.nemo DIR writes one)"
         )
-    return NemoTransducerRecognizer(path, config.cuda)
+    return NemoRecognizer(path, config.cuda, family=config.model)
 
 
 def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
@@ -48,8 +52,10 @@ def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
 
 
 def auto(config: SpeechEventConfig) -> Recognizer:
-    _conformer_transducer_only(config)  # never fall back silently from the family asked for
-    if config.language == "english" and not config.en_model_path:
+    """pocketsphinx for English without a model of the default family; otherwise the model. Never
+    falls back silently from another family asked for."""
+    _nemo_family(config)
+    if config.language == "english" and not config.en_model_path and config.model == "conformer-transducer":
         return pocketsphinx(config)
     return nemo(config)
 

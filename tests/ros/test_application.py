@@ -7,7 +7,7 @@ import sys
 import time
 import wave
 from pathlib import Path
-from typing import Dict, List, Tuple
+from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
 import pytest
@@ -16,6 +16,7 @@ import rospy
 from std_msgs import msg as std_msgs
 
 from fixtures.audio import speak_tones
+from fixtures.tones_model import tones_tdt_model_directory
 from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
@@ -27,9 +28,11 @@ def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:
     return [node for name, nodes in master.getSystemState()[1] if name == topic for node in nodes]
 
 
-def _start_node(roscore: Dict[str, str], work: Path) -> "Tuple[Processes, subprocess.Popen[str]]":
+def _start_node(
+    roscore: Dict[str, str], work: Path, arguments: Sequence[str] = ("--recognizer", "fake")
+) -> "Tuple[Processes, subprocess.Popen[str]]":
     processes = Processes(roscore, work)  # stopped whatever happens in the test
-    return processes, processes.start("node", [sys.executable, str(APPLICATION), "--recognizer", "fake"])
+    return processes, processes.start("node", [sys.executable, str(APPLICATION), *arguments])
 
 
 @pytest.mark.parametrize("attempt", range(4))
@@ -54,9 +57,23 @@ def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(
         processes.stop_all()
 
 
+def _robot_file_with_parakeet(work: Path) -> List[str]:
+    """The robot's v1.1 file as it is but for model parakeet, and the directory of its model."""
+    robot = work / "robot.ini"
+    lines = (
+        (ROOT / "config" / "robot_release_v1.1.ini").read_text().replace("conformer-transducer", "parakeet")
+    )
+    robot.write_text(f"{lines}en_model_path\t{tones_tdt_model_directory()}\n")
+    return ["-c", str(robot)]
+
+
+@pytest.mark.parametrize("node", ["fake", "robot file, model parakeet"])
 def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
-    roscore: Dict[str, str], tmp_path: Path
+    roscore: Dict[str, str], tmp_path: Path, node: str
 ) -> None:
+    """The fake engine; and the robot's own configuration file with model parakeet, its directory
+    there (the TDT tones model), the engine the node picks from it."""
+    node_arguments = ["--recognizer", "fake"] if node == "fake" else _robot_file_with_parakeet(tmp_path)
     rate = 48000
     silence = np.zeros(rate, dtype=np.float32)
     session = np.concatenate([silence, speak_tones("open the door", rate), silence])
@@ -68,7 +85,7 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
         wav.writeframes(np.round(session * 32767).astype("<i2").tobytes())
     texts: List[str] = []
     subscriber = rospy.Subscriber(TEXT_TOPIC, std_msgs.String, lambda message: texts.append(message.data))
-    processes, _ = _start_node(roscore, tmp_path)
+    processes, _ = _start_node(roscore, tmp_path, node_arguments)
     try:
         wait_for(lambda: subscriber.get_num_connections() > 0, "the node's text publisher", 60)
         driver = subprocess.run(

@@ -13,8 +13,7 @@ import rosgraph
 
 from harness.ros_runner import descendants, route_address
 from tests.ros.conftest import ROOT, ros_environment
-
-SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+from tests.scenario_files import SCENARIOS, TONES_SCENARIOS
 
 
 def _harness(environment: Dict[str, str], *arguments: str) -> "subprocess.CompletedProcess[str]":
@@ -41,6 +40,19 @@ def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: 
     lines = result.stdout.splitlines()
     assert lines[-1] == f"{len(SCENARIOS)} passed, 0 failed", result.stdout + result.stderr
     assert [line.split("  ")[0] for line in lines[:-1]] == ["PASS"] * len(SCENARIOS)
+    assert result.returncode == 0
+
+
+def test_every_tones_scenario_passes_on_ros_with_the_parakeet_fixture_model(tmp_path: Path) -> None:
+    """The TDT tones model (fixture-parakeet) loaded by the node's process, as in memory."""
+    copies = []
+    for path in TONES_SCENARIOS:
+        copy = tmp_path / path.name
+        copy.write_text(f'recognizer = "fixture-parakeet"\n{path.read_text()}')
+        copies.append(str(copy))
+    result = _harness(_own_roscore_environment(tmp_path), *copies)
+    lines = result.stdout.splitlines()
+    assert lines[-1] == f"{len(TONES_SCENARIOS)} passed, 0 failed", result.stdout + result.stderr
     assert result.returncode == 0
 
 

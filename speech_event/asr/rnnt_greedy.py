@@ -5,20 +5,22 @@ the prediction network's state; emit it while it is not the blank, at most ``max
 frame, updating the state only on emission; the blank moves on to the next frame.
 """
 
-from typing import Callable, List, Tuple, TypeVar
+from typing import Callable, Tuple, TypeVar
 
 import numpy as np
 
+from speech_event.asr.hypothesis import Hypothesis
+
 State = TypeVar("State")
-# (encoder frame [D], last token, state) -> (logits [V + 1], state after that token)
+# (encoder frame [D], last token, state) -> (logits, state after that token)
 Step = Callable[[np.ndarray, int, State], Tuple[np.ndarray, State]]
 
 
-def greedy_decode(
+def rnnt_greedy(
     frames: np.ndarray, step: Step[State], state: State, blank: int, max_symbols: int
-) -> List[int]:
-    """Token ids for ``frames`` [T', D]; the first 'last token' is the blank, as in NeMo."""
-    tokens: List[int] = []
+) -> Hypothesis:
+    """The hypothesis for ``frames`` [T', D]; the first 'last token' is the blank, as in NeMo."""
+    found = Hypothesis()
     last = blank
     for frame in frames:
         for _ in range(max_symbols):
@@ -26,6 +28,6 @@ def greedy_decode(
             token = int(np.argmax(logits))
             if token == blank:
                 break
-            tokens.append(token)
+            found.emit(token, logits)
             last, state = token, next_state
-    return tokens
+    return found

@@ -1,0 +1,18 @@
+"""The scenario files, and those written for the fake engine in the tones voice (the others name
+the engine they need): every engine that transcribes the tones voice passes those."""
+
+from pathlib import Path
+
+from harness.scenario import load_scenario
+from speech_event.config import SpeechEventConfig
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def _for_the_fake_in_tones(path: Path) -> bool:
+    scenario = load_scenario(path, SpeechEventConfig())
+    return (scenario.voice, scenario.recognizer) == ("tones", "fake")
+
+
+TONES_SCENARIOS = [path for path in SCENARIOS if _for_the_fake_in_tones(path)]
