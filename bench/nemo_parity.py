@@ -31,8 +31,10 @@ import numpy as np
 
 from fixtures.nemo_config import PREPROCESSOR
 from fixtures.tts import speak_tts
+from speech_event.asr.ctc_greedy import ctc_greedy
 from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.export_nemo import export
+from speech_event.asr.vocabulary import load_vocabulary
 
 SENTENCES = [
     "go to the kitchen",
@@ -223,8 +225,18 @@ def _nemo_hypotheses(model: Any, audio: List[np.ndarray], head: str) -> List[Any
     return list(hypotheses)
 
 
+def _nemo_tokens(hypothesis: Any, blank: int) -> List[int]:
+    sequence = hypothesis.y_sequence
+    if getattr(sequence, "ndim", 1) == 2:
+        # CTC: NeMo's hypothesis keeps the frames' log-probabilities, its greedy decoding their best
+        # tokens with repeats merged and blanks dropped (its text, compared too, is that decoding's)
+        return ctc_greedy(np.asarray(sequence), blank).tokens
+    return [int(token) for token in sequence]
+
+
 def _compare(name: str, exported: Path, hypotheses: List[Any], audio: List[np.ndarray]) -> bool:
     engine = NemoRecognizer(exported)
+    blank = load_vocabulary(exported / "vocab.txt").blank
     matches, worst_confidence = 0, 0.0
     busy = seconds = 0.0
     for sentence, samples, theirs in zip(SENTENCES, audio, hypotheses):
@@ -232,8 +244,8 @@ def _compare(name: str, exported: Path, hypotheses: List[Any], audio: List[np.nd
         ours = engine.hypothesis(samples)
         busy += time.perf_counter() - started
         seconds += samples.size / 16000
-        tokens = [int(token) for token in theirs.y_sequence]
-        same = ours.tokens == tokens
+        tokens = _nemo_tokens(theirs, blank)
+        same = ours.tokens == tokens and engine.transcribe(samples).text == theirs.text
         matches += same
         difference = abs(ours.confidence - float(np.exp(float(theirs.score))))
         worst_confidence = max(worst_confidence, difference)
@@ -241,7 +253,7 @@ def _compare(name: str, exported: Path, hypotheses: List[Any], audio: List[np.nd
             f"  {sentence!r}: {'same' if same else 'DIFFERENT'} ({len(tokens)} tokens from NeMo; "
             f"confidence {ours.confidence:.4g}, NeMo's {np.exp(float(theirs.score)):.4g})"
         )
-    print(f"{name}: {matches} of {len(SENTENCES)} utterances give NeMo's own tokens; ", end="")
+    print(f"{name}: {matches} of {len(SENTENCES)} utterances give NeMo's own tokens and text; ", end="")
     print(
         f"confidence differs by {worst_confidence:.2g} at most; engine RTF {busy / seconds:.3f}", flush=True
     )

@@ -42,9 +42,11 @@ VOICES: Dict[str, Voice] = {
 
 FIXTURE_MODEL = "fixture-model"
 FIXTURE_PARAKEET = "fixture-parakeet"
-# The node's engines, plus the tones models built at test time (fixtures/tones_model.py): the
-# conformer-transducer's RNN-T and the parakeet family's TDT format.
-RECOGNIZERS = (*ENGINES, FIXTURE_MODEL, FIXTURE_PARAKEET)
+FIXTURE_WHISPER = "fixture-whisper"
+# The node's engines, plus the tones models built at test time: the conformer-transducer's RNN-T
+# and the parakeet family's TDT format (fixtures/tones_model.py), and a Whisper model
+# (fixtures/whisper_tones_model.py).
+RECOGNIZERS = (*ENGINES, FIXTURE_MODEL, FIXTURE_PARAKEET, FIXTURE_WHISPER)
 # A model path written so in a scenario's [config] is a model built at test time.
 FIXTURE_PREFIX = "fixture:"
 FIXTURE_TONES = "fixture:tones"
@@ -60,6 +62,12 @@ def _tones_tdt_model() -> str:
     from fixtures.tones_model import tones_tdt_model_directory
 
     return str(tones_tdt_model_directory())
+
+
+def _whisper_tones_model() -> str:
+    from fixtures.whisper_tones_model import whisper_tones_model_directory
+
+    return str(whisper_tones_model_directory())
 
 
 def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
@@ -83,6 +91,11 @@ def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventCo
     if name == FIXTURE_PARAKEET:
         tdt = _tones_tdt_model()
         return "nemo", dataclasses.replace(config, model="parakeet", en_model_path=tdt, rw_model_path=tdt)
+    if name == FIXTURE_WHISPER:
+        whisper = _whisper_tones_model()
+        return "whisper", dataclasses.replace(
+            config, model="whisper", en_model_path=whisper, rw_model_path=whisper
+        )
     return name, config
 
 

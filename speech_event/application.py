@@ -108,9 +108,13 @@ def without_remappings(argv: Optional[List[str]]) -> List[str]:
 def main(argv: Optional[List[str]] = None) -> int:
     raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
-        from speech_event.asr.export_nemo import main as export_main
+        from speech_event.asr.export_nemo import main as export_nemo
 
-        return export_main(raw[1:])
+        return export_nemo(raw[1:])
+    if raw[:1] == ["export-whisper"]:
+        from speech_event.asr.export_whisper import main as export_whisper
+
+        return export_whisper(raw[1:])
     arguments = _arguments(raw)
     try:
         config = load_config(arguments.config) if arguments.config else SpeechEventConfig()

@@ -20,7 +20,7 @@ from fixtures.transducer_model import build_random_transducer
 from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.errors import ModelError
 from speech_event.asr.features import FeatureSettings, features, log_mel
-from speech_event.asr.model import providers
+from speech_event.asr.onnx_session import providers
 from speech_event.asr.rnnt_greedy import rnnt_greedy
 from speech_event.asr.vocabulary import Vocabulary, load_vocabulary
 from speech_event.resample import resample

@@ -251,17 +251,17 @@ def test_the_robots_new_keys_are_checked(line: str, message: str) -> None:
     [
         (
             "whisper",
-            "model whisper: this release runs the conformer-transducer and parakeet families; "
-            "the whisper engine is not available yet",
+            "language english with model whisper needs en_model_path: the directory of an exported whisper "
+            "model (speech-event export-whisper CHECKPOINT DIR writes one)",
         ),
         (
             "parakeet",
-            "language english with model parakeet needs en_model_path: the directory of an exported NeMo "
+            "language english with model parakeet needs en_model_path: the directory of an exported parakeet "
             "model (speech-event export-nemo MODEL.nemo DIR writes one)",
         ),
     ],
 )
-def test_a_model_family_the_node_cannot_run_as_configured_stops_it_with_status_2(
+def test_a_model_family_without_its_model_directory_stops_the_node_with_status_2(
     tmp_path: Path, family: str, message: str
 ) -> None:
     robot = tmp_path / "robot.ini"

@@ -208,7 +208,7 @@ def test_model_parakeet_without_a_directory_does_not_fall_back_to_pocketsphinx()
     with pytest.raises(ModelError) as error:
         RECOGNIZERS["auto"](SpeechEventConfig(language="english", model="parakeet"))
     assert str(error.value) == (
-        "language english with model parakeet needs en_model_path: the directory of an exported NeMo model "
+        "language english with model parakeet needs en_model_path: the directory of an exported parakeet model "
         "(speech-event export-nemo MODEL.nemo DIR writes one)"
     )
 

@@ -88,8 +88,8 @@ def test_kinyarwanda_without_a_model_stops_the_node_with_status_2(tmp_path: Path
     result = run_application("-c", str(config))
     assert result.returncode == 2
     assert result.stderr == (
-        "error: language kinyarwanda needs rw_model_path: the directory of an exported NeMo transducer "
-        "(speech-event export-nemo MODEL.nemo DIR writes one)\n"
+        "error: language kinyarwanda with model conformer-transducer needs rw_model_path: the directory of an "
+        "exported conformer-transducer model (speech-event export-nemo MODEL.nemo DIR writes one)\n"
     )
 
 

@@ -56,7 +56,7 @@ def test_noise_alone_transcribes_to_nothing(engine: NemoRecognizer, seed: int, s
     assert engine.transcribe(noise(int(seconds * 16000), -40.0, np.random.default_rng(seed))).text == ""
 
 
-@pytest.mark.parametrize("model", ["fixture-model", "fixture-parakeet"])
+@pytest.mark.parametrize("model", ["fixture-model", "fixture-parakeet", "fixture-whisper"])
 @pytest.mark.parametrize("path", TONES_SCENARIOS, ids=[path.stem for path in TONES_SCENARIOS])
 def test_every_tones_scenario_passes_with_the_fixture_models_as_with_the_fake(path: Path, model: str) -> None:
     scenario = load_scenario(path, SpeechEventConfig())

@@ -37,10 +37,7 @@ def padded_as_nemo_does(audio: np.ndarray, sample_rate: int) -> np.ndarray:
 
 
 class NemoRecognizer:
-    def __init__(
-        self, model_directory: Union[str, Path], cuda: bool = False, family: Optional[str] = None
-    ) -> None:
-        """``family``: the robot's ``model`` setting, when the directory must be of that family."""
+    def __init__(self, model_directory: Union[str, Path], cuda: bool = False) -> None:
         directory = Path(model_directory)
         if directory.suffix == ".nemo":
             raise ModelError(
@@ -51,12 +48,6 @@ class NemoRecognizer:
         if not directory.is_dir():
             raise ModelError(f"{directory}: no such model directory")
         self._manifest = load_manifest(directory / MANIFEST_FILE)
-        if family is not None and self._manifest.family != family:
-            raise ModelError(
-                f"{directory} holds a {self._manifest.family} model ({MANIFEST_FILE}: family), but model "
-                f"is {family}: set model {self._manifest.family}, or give a directory exported from a "
-                f"{family} model"
-            )
         self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
         self._model: Union[CtcModel, TransducerModel] = (
             CtcModel(directory, cuda) if self._manifest.decoding == CTC else TransducerModel(directory, cuda)

@@ -56,6 +56,16 @@ def manifest_json(manifest: Manifest) -> Dict[str, Any]:
     return document
 
 
+def family_of(directory: Path) -> str:
+    """The family a model directory was exported from (its config.json's family), whatever its
+    engine; a directory written before families were recorded is a conformer-transducer."""
+    try:
+        document = json.loads((directory / MANIFEST_FILE).read_text(encoding="utf-8"))
+        return str(document.get("family", CONFORMER_TRANSDUCER))
+    except (OSError, ValueError, AttributeError):
+        return CONFORMER_TRANSDUCER  # the engine says what is wrong with it
+
+
 def _checked(manifest: Manifest) -> Manifest:
     if manifest.decoding not in DECODINGS:
         raise ValueError(f"model_type {manifest.decoding!r} is not one of {', '.join(DECODINGS)}")

@@ -11,16 +11,13 @@ A CTC model (or a hybrid model's CTC head) is one file, ``model.onnx``: ``audio_
 ``length`` as above -> ``logprobs`` [B, T', V + 1].
 """
 
-import logging
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import onnxruntime
 
-from speech_event.asr.errors import ModelError
-
-_LOG = logging.getLogger("speech_event")
+from speech_event.asr.onnx_session import check_tensors, open_session, providers
 
 ENCODER_FILE = "encoder-model.onnx"
 DECODER_JOINT_FILE = "decoder_joint-model.onnx"
@@ -40,49 +37,18 @@ DECODER_OUTPUTS = {"outputs": -1, "prednet_lengths": -1, "output_states_1": 3, "
 LstmState = Tuple[np.ndarray, np.ndarray]
 
 
-def providers(cuda: bool) -> List[str]:
-    """CUDA when asked for and onnxruntime has it; otherwise the CPU, with a warning if CUDA was asked for."""
-    if not cuda:
-        return ["CPUExecutionProvider"]
-    if "CUDAExecutionProvider" in onnxruntime.get_available_providers():
-        return ["CUDAExecutionProvider", "CPUExecutionProvider"]
-    _LOG.warning("cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU")
-    return ["CPUExecutionProvider"]
-
-
-def _describe(expected: Dict[str, int]) -> str:
-    return ", ".join(f"{name} ({rank}-D)" if rank > 0 else name for name, rank in expected.items())
-
-
-def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected: Dict[str, int]) -> None:
-    shapes = {arg.name: arg.shape for arg in found}
-    missing = [name for name in expected if name not in shapes]
-    wrong_rank = [
-        f"{name} is {len(shapes[name])}-D"
-        for name, rank in expected.items()
-        if name in shapes and rank > 0 and len(shapes[name]) != rank
-    ]
-    if missing or wrong_rank:
-        problem = f"missing {', '.join(missing)}" if missing else "; ".join(wrong_rank)
-        raise ModelError(
-            f"{path}: {kind} are {sorted(shapes)} ({problem}); "
-            f"{path.name} of a NeMo export has {_describe(expected)}"
-        )
+NEMO_DIRECTORY = (
+    f"a model directory holds {ENCODER_FILE}, {DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), "
+    "vocab.txt and config.json (speech-event export-nemo MODEL.nemo DIR writes one)"
+)
 
 
 def _session(path: Path, execution_providers: List[str]) -> onnxruntime.InferenceSession:
-    if not path.is_file():
-        raise ModelError(
-            f"{path.parent}: missing {path.name}; a model directory holds {ENCODER_FILE}, "
-            f"{DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), vocab.txt and config.json "
-            "(speech-event export-nemo MODEL.nemo DIR writes one)"
-        )
-    options = onnxruntime.SessionOptions()
-    options.log_severity_level = 3
-    try:
-        return onnxruntime.InferenceSession(str(path), options, providers=execution_providers)
-    except Exception as problem:  # onnxruntime raises its own exception types
-        raise ModelError(f"{path}: onnxruntime cannot load it: {problem}") from None
+    return open_session(path, execution_providers, NEMO_DIRECTORY)
+
+
+def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected: Dict[str, int]) -> None:
+    check_tensors(path, kind, found, expected, "a NeMo export")
 
 
 class TransducerModel:

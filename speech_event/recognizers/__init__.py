@@ -1,46 +1,62 @@
 """Recognizers by name: adapters of the Recognizer port, built from the node's configuration.
 
-``auto`` is what the robot runs: the NeMo model of the configured language when its path is set,
-otherwise, for English, the embedded pocketsphinx engine. Engines import their runtime only when
-chosen, so the node itself needs neither onnxruntime nor pocketsphinx.
+``auto`` is what the robot runs: the model of the family ``model`` names (conformer-transducer,
+parakeet: the NeMo engine; whisper: the Whisper engine) for the configured language when its path
+is set, otherwise, for English with the default family, the embedded pocketsphinx engine. Engines
+import their runtime only when chosen, so the node itself needs neither onnxruntime nor pocketsphinx.
 """
 
 import dataclasses
+from pathlib import Path
 from typing import Callable, Dict
 
 from speech_event.asr.errors import ModelError
+from speech_event.asr.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES, family_of
 from speech_event.config import SpeechEventConfig
 from speech_event.engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
 RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
+WHISPER = "whisper"
 
 
-NEMO_FAMILIES = ("conformer-transducer", "parakeet")
-
-
-def _nemo_family(config: SpeechEventConfig) -> None:
-    if config.model not in NEMO_FAMILIES:
+def _model_directory(config: SpeechEventConfig) -> Path:
+    """The configured language's model directory, which must be of the family ``model`` names."""
+    key = "rw_model_path" if config.language == "kinyarwanda" else "en_model_path"
+    path = getattr(config, key)
+    if not path:
+        exporter = "export-whisper CHECKPOINT" if config.model == WHISPER else "export-nemo MODEL.nemo"
         raise ModelError(
-            f"model {config.model}: this release runs the conformer-transducer and parakeet families; "
-            f"the {config.model} engine is not available yet"
+            f"language {config.language} with model {config.model} needs {key}: the directory of an "
+            f"exported {config.model} model (speech-event {exporter} DIR writes one)"
         )
+    directory = Path(path)
+    family = family_of(directory)
+    if directory.is_dir() and family != config.model:
+        raise ModelError(
+            f"{directory} holds a {family} model (config.json: family), but model is {config.model}: "
+            f"set model {family}, or give a directory exported from a {config.model} model"
+        )
+    return directory
 
 
 def nemo(config: SpeechEventConfig) -> Recognizer:
     """The exported NeMo model of the configured language, of the family ``model`` names."""
     from speech_event.asr.engine import NemoRecognizer
 
-    _nemo_family(config)
-    key = "rw_model_path" if config.language == "kinyarwanda" else "en_model_path"
-    path = getattr(config, key)
-    if not path:
-        raise ModelError(
-            f"language {config.language} with model {config.model} needs {key}: the directory of an "
-            "exported NeMo model (speech-event export-nemo MODEL.nemo DIR writes one)"
-        )
-    return NemoRecognizer(path, config.cuda, family=config.model)
+    if config.model not in NEMO_FAMILIES:
+        raise ModelError(f"model {config.model} is not a NeMo family ({', '.join(NEMO_FAMILIES)})")
+    return NemoRecognizer(_model_directory(config), config.cuda)
+
+
+def whisper(config: SpeechEventConfig) -> Recognizer:
+    """The exported Whisper model of the configured language (model whisper)."""
+    from speech_event.asr.whisper_engine import WhisperRecognizer
+
+    if config.model != WHISPER:
+        raise ModelError(f"the whisper engine needs model whisper; model is {config.model}")
+    return WhisperRecognizer(_model_directory(config), config.language, config.cuda)
 
 
 def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
@@ -52,10 +68,11 @@ def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
 
 
 def auto(config: SpeechEventConfig) -> Recognizer:
-    """pocketsphinx for English without a model of the default family; otherwise the model. Never
-    falls back silently from another family asked for."""
-    _nemo_family(config)
-    if config.language == "english" and not config.en_model_path and config.model == "conformer-transducer":
+    """The model of the family ``model`` names; pocketsphinx for English without a model of the
+    default family. Never falls back silently from another family asked for."""
+    if config.model == WHISPER:
+        return whisper(config)
+    if config.language == "english" and not config.en_model_path and config.model == CONFORMER_TRANSDUCER:
         return pocketsphinx(config)
     return nemo(config)
 
@@ -63,6 +80,7 @@ def auto(config: SpeechEventConfig) -> Recognizer:
 RECOGNIZERS: Dict[str, RecognizerFactory] = {
     "auto": auto,
     "nemo": nemo,
+    "whisper": whisper,
     "pocketsphinx": pocketsphinx,
     "fake": lambda config: ToneRecognizer(),
 }

@@ -17,6 +17,7 @@ from std_msgs import msg as std_msgs
 
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_tdt_model_directory
+from fixtures.whisper_tones_model import whisper_tones_model_directory
 from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
@@ -57,23 +58,24 @@ def test_the_node_comes_up_as_speech_event_and_stops_on_sigint(
         processes.stop_all()
 
 
-def _robot_file_with_parakeet(work: Path) -> List[str]:
-    """The robot's v1.1 file as it is but for model parakeet, and the directory of its model."""
+def _robot_file_with(model: str, directory: Path, work: Path) -> List[str]:
+    """The robot's v1.1 file as it is but for its model key, and the directory of that model."""
     robot = work / "robot.ini"
-    lines = (
-        (ROOT / "config" / "robot_release_v1.1.ini").read_text().replace("conformer-transducer", "parakeet")
-    )
-    robot.write_text(f"{lines}en_model_path\t{tones_tdt_model_directory()}\n")
+    lines = (ROOT / "config" / "robot_release_v1.1.ini").read_text().replace("conformer-transducer", model)
+    robot.write_text(f"{lines}en_model_path\t{directory}\n")
     return ["-c", str(robot)]
 
 
-@pytest.mark.parametrize("node", ["fake", "robot file, model parakeet"])
+@pytest.mark.parametrize("node", ["fake", "parakeet", "whisper"])
 def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
     roscore: Dict[str, str], tmp_path: Path, node: str
 ) -> None:
-    """The fake engine; and the robot's own configuration file with model parakeet, its directory
-    there (the TDT tones model), the engine the node picks from it."""
-    node_arguments = ["--recognizer", "fake"] if node == "fake" else _robot_file_with_parakeet(tmp_path)
+    """The fake engine; and the robot's own configuration file with model parakeet or whisper, the
+    model directory there (the TDT and Whisper tones models), the engine the node picks from it."""
+    directories = {"parakeet": tones_tdt_model_directory, "whisper": whisper_tones_model_directory}
+    arguments = (
+        ["--recognizer", "fake"] if node == "fake" else _robot_file_with(node, directories[node](), tmp_path)
+    )
     rate = 48000
     silence = np.zeros(rate, dtype=np.float32)
     session = np.concatenate([silence, speak_tones("open the door", rate), silence])
@@ -85,7 +87,7 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
         wav.writeframes(np.round(session * 32767).astype("<i2").tobytes())
     texts: List[str] = []
     subscriber = rospy.Subscriber(TEXT_TOPIC, std_msgs.String, lambda message: texts.append(message.data))
-    processes, _ = _start_node(roscore, tmp_path, node_arguments)
+    processes, _ = _start_node(roscore, tmp_path, arguments)
     try:
         wait_for(lambda: subscriber.get_num_connections() > 0, "the node's text publisher", 60)
         driver = subprocess.run(
@@ -102,7 +104,7 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
             timeout=60,
         )
         assert driver.returncode == 0, driver.stderr
-        wait_for(lambda: texts == ["open the door"], "the text", 10)
+        wait_for(lambda: texts == ["open the door"], "the text", 30)
     finally:
         subscriber.unregister()
         processes.stop_all()

@@ -43,12 +43,15 @@ def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: 
     assert result.returncode == 0
 
 
-def test_every_tones_scenario_passes_on_ros_with_the_parakeet_fixture_model(tmp_path: Path) -> None:
-    """The TDT tones model (fixture-parakeet) loaded by the node's process, as in memory."""
+@pytest.mark.parametrize("model", ["fixture-parakeet", "fixture-whisper"])
+def test_every_tones_scenario_passes_on_ros_with_the_other_families_fixture_models(
+    tmp_path: Path, model: str
+) -> None:
+    """The TDT tones model and the Whisper tones model loaded by the node's process, as in memory."""
     copies = []
     for path in TONES_SCENARIOS:
         copy = tmp_path / path.name
-        copy.write_text(f'recognizer = "fixture-parakeet"\n{path.read_text()}')
+        copy.write_text(f'recognizer = "{model}"\n{path.read_text()}')
         copies.append(str(copy))
     result = _harness(_own_roscore_environment(tmp_path), *copies)
     lines = result.stdout.splitlines()
