@@ -4,9 +4,19 @@ command set; real-time factors measured on 2 cores and written down.
 (a) pocketsphinx on 32 tts-voice robot commands, language-model mode and grammar mode;
 (b) pocketsphinx on the real recorded speech of Debian's pocketsphinx-testdata (LibriVox);
 (c) the NeMo features, and the NeMo engine on models built at test time (a random one and the
-tones fixture model); the large-size figure comes from bench/nemo_parity.py (needs NeMo).
+tones fixture model);
+(d) each model family at realistic size (random weights: the conformer-transducer large,
+Parakeet-TDT 0.6B-shaped, Whisper base and small), each in a process of its own: load time,
+real-time factor on 5 and 10 s of speech, peak resident memory, and what ``cuda true`` does on a
+machine without CUDA. The models come from ``bench/family_models.py`` (needs NeMo and
+openai-whisper, once): SPEECH_EVENT_FAMILY_MODELS=DIR names where it wrote them.
 """
 
+import logging
+import os
+import resource
+import subprocess
+import sys
 import tempfile
 import time
 import wave
@@ -21,6 +31,10 @@ from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
 from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.features import FeatureSettings, features
+from speech_event.asr.manifest import family_of
+from speech_event.asr.whisper_engine import WhisperRecognizer
+from speech_event.asr.whisper_features import whisper_log_mel
+from speech_event.asr.whisper_model import DecoderSession
 from speech_event.ports import Recognizer
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.resample import resample
@@ -144,7 +158,77 @@ def nemo_engine() -> None:
         print(f"NeMo engine, tones fixture model: built in {built:.3f} s, RTF {rtf:.4f}, heard {text!r}")
 
 
+class _Said(logging.Handler):
+    def __init__(self) -> None:
+        super().__init__()
+        self.messages: List[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(record.getMessage())
+
+
+def _family_engine(directory: Path, cuda: bool) -> Recognizer:
+    if family_of(directory) == "whisper":
+        return WhisperRecognizer(directory, "english", cuda)
+    return NemoRecognizer(directory, cuda)
+
+
+def _whisper_costs(engine: WhisperRecognizer, audio: np.ndarray) -> str:
+    """A random model decodes as many tokens as it likes (up to 224), so its RTF says little:
+    the window's cost and a token's cost, and the RTF at 4 tokens per second of speech."""
+    started = time.perf_counter()
+    cross = engine._model.encode(whisper_log_mel(audio, engine._manifest.mel_bands))  # the bench looks inside
+    window = time.perf_counter() - started
+    session = DecoderSession(engine._model, cross)
+    session(engine._manifest.prompt("english"))
+    started = time.perf_counter()
+    for _ in range(50):
+        session([engine._manifest.eot - 1])
+    token = (time.perf_counter() - started) / 50
+    rtf = (window + (4 + 4 * 5) * token) / 5
+    costs = f"30 s window {window * 1000:.0f} ms, a token {token * 1000:.1f} ms"
+    return f"{costs}: RTF {rtf:.3f} at 4 tokens/s on 5 s"
+
+
+def one_family_model(directory: Path) -> None:
+    """Run in a process of its own, so its peak memory is the engine's."""
+    said = _Said()
+    logging.getLogger("speech_event").addHandler(said)
+    started = time.perf_counter()
+    engine = _family_engine(directory, cuda=False)
+    loaded = time.perf_counter() - started
+    speech = np.concatenate([speak_tts(command, 16000) for command in COMMANDS])
+    figures = []
+    for seconds in (5, 10):
+        audio = speech[: seconds * 16000]
+        engine.transcribe(audio)  # warm
+        started = time.perf_counter()
+        engine.transcribe(audio)
+        figures.append(f"RTF {(time.perf_counter() - started) / seconds:.3f} on {seconds} s")
+    if isinstance(engine, WhisperRecognizer):
+        figures.append(_whisper_costs(engine, speech[: 5 * 16000]))
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    _family_engine(directory, cuda=True).transcribe(speech[:16000])
+    print(
+        f"(d) {directory.name:20s} loaded in {loaded:.1f} s; {', '.join(figures)}; peak memory {peak:.0f} MiB"
+    )
+    print(f"    cuda true here: {len(said.messages)} warning(s) {said.messages}, then the CPU")
+
+
+def family_models() -> None:
+    where = os.environ.get("SPEECH_EVENT_FAMILY_MODELS")
+    if not where:
+        print("(d) set SPEECH_EVENT_FAMILY_MODELS to the directory bench/family_models.py wrote")
+        return
+    for directory in sorted(Path(where).iterdir()):
+        subprocess.run([sys.executable, "-m", "bench.asr", "--one", str(directory)], check=True)
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["--one"]:
+        one_family_model(Path(sys.argv[2]))
+        sys.exit(0)
     commands()
     recorded_speech()
     nemo_engine()
+    family_models()

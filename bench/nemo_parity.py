@@ -13,7 +13,8 @@ greedy_batch decoding) of the same model on 10 utterances: the same tokens, and 
 - fastconformer-hybrid: a FastConformer hybrid RNN-T/CTC (EncDecHybridRNNTCTCBPEModel, as the
   robot loads Parakeet; 17 blocks, d_model 512, 8x depthwise striding), both heads exported;
 - fastconformer-tdt: a FastConformer TDT (EncDecRNNTBPEModel with TDT durations 0-4, as
-  Parakeet-TDT).
+  Parakeet-TDT);
+- fastconformer-ctc: a plain FastConformer CTC model (EncDecCTCModelBPE).
 
 Random weights give flat logits, so each output layer is scaled up (near-ties must not decide the
 result) and the blank biased so that blanks and emissions mix. Prints each engine's real-time
@@ -191,10 +192,28 @@ def _fastconformer_tdt(tokenizer: Path) -> Any:
     return EncDecRNNTBPEModel(cfg=OmegaConf.create(_config(tokenizer, fast=True, tdt=True)))
 
 
+def _fastconformer_ctc(tokenizer: Path) -> Any:
+    from nemo.collections.asr.models import EncDecCTCModelBPE
+    from omegaconf import OmegaConf
+
+    config = _config(tokenizer, fast=True)
+    for transducer_part in ("joint", "loss"):
+        del config[transducer_part]
+    config["decoder"] = {
+        "_target_": "nemo.collections.asr.modules.ConvASRDecoder",
+        "feat_in": 512,
+        "num_classes": -1,
+        "vocabulary": [],
+    }
+    config["decoding"] = {"strategy": "greedy_batch"}
+    return EncDecCTCModelBPE(cfg=OmegaConf.create(config))
+
+
 CASES: Dict[str, Case] = {
     "conformer-rnnt": Case(_conformer_rnnt),
     "fastconformer-hybrid": Case(_fastconformer_hybrid, ("rnnt", "ctc")),
     "fastconformer-tdt": Case(_fastconformer_tdt),
+    "fastconformer-ctc": Case(_fastconformer_ctc, ("ctc",)),
 }
 
 
@@ -204,21 +223,23 @@ def _biased(model: Any) -> None:
     import torch
 
     with torch.no_grad():
-        output_layer = model.joint.joint_net[-1]
-        output_layer.weight.mul_(JOINT_OUTPUT_SCALE)
-        output_layer.bias[model.joint.num_classes_with_blank - 1] += BLANK_BIAS
-        if hasattr(model, "ctc_decoder"):
-            ctc_layer = model.ctc_decoder.decoder_layers[0]
+        if hasattr(model, "joint"):
+            output_layer = model.joint.joint_net[-1]
+            output_layer.weight.mul_(JOINT_OUTPUT_SCALE)
+            output_layer.bias[model.joint.num_classes_with_blank - 1] += BLANK_BIAS
+        ctc_decoder = getattr(model, "ctc_decoder", None) or (
+            None if hasattr(model, "joint") else model.decoder
+        )
+        if ctc_decoder is not None:
+            ctc_layer = ctc_decoder.decoder_layers[0]
             ctc_layer.weight.mul_(JOINT_OUTPUT_SCALE)
             ctc_layer.bias[-1] += CTC_BLANK_BIAS
 
 
 def _nemo_hypotheses(model: Any, audio: List[np.ndarray], head: str) -> List[Any]:
     """NeMo's own transcription (its preprocessor, encoder and default greedy decoding)."""
-    if head == "ctc":
-        model.change_decoding_strategy(decoder_type="ctc", verbose=False)
-    elif hasattr(model, "ctc_decoder"):
-        model.change_decoding_strategy(decoder_type="rnnt", verbose=False)
+    if hasattr(model, "ctc_decoder"):  # a hybrid model: the head asked for
+        model.change_decoding_strategy(decoder_type=head, verbose=False)
     hypotheses = model.transcribe(audio, batch_size=1, return_hypotheses=True, verbose=False)
     if isinstance(hypotheses, tuple):  # older NeMo: (best, all)
         hypotheses = hypotheses[0]

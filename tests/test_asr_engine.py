@@ -157,8 +157,8 @@ def test_a_nemo_archive_given_directly_says_how_to_export_it(tmp_path: Path) -> 
     with pytest.raises(ModelError) as error:
         NemoRecognizer(archive)
     assert str(error.value) == (
-        f"{archive} is a .nemo archive, not an exported model directory: export it once with "
-        f"'speech-event export-nemo {archive} OUT_DIR' (needs the 'export' extra: nemo_toolkit), then give OUT_DIR"
+        f"{archive} is a .nemo file, not an exported model directory: export it once with "
+        f"'speech-event export-nemo {archive} OUT_DIR' (needs the 'export' extra), then give OUT_DIR"
     )
 
 

@@ -198,8 +198,9 @@ def test_a_missing_decoder_and_mismatched_tokens_are_named(tmp_path: Path) -> No
 def test_a_checkpoint_given_directly_says_how_to_export_it(tmp_path: Path) -> None:
     with pytest.raises(ModelError) as error:
         WhisperRecognizer(tmp_path / "base.pt", "english")
-    assert str(error.value).startswith(
-        f"{tmp_path / 'base.pt'} is a Whisper checkpoint, not an exported model"
+    assert str(error.value) == (
+        f"{tmp_path / 'base.pt'} is a .pt file, not an exported model directory: export it once with "
+        f"'speech-event export-whisper {tmp_path / 'base.pt'} OUT_DIR' (needs the 'export' extra), then give OUT_DIR"
     )
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import onnxruntime
 
 from speech_event.asr.ctc_greedy import ctc_greedy
+from speech_event.asr.directory import exported_directory
 from speech_event.asr.errors import ModelError
 from speech_event.asr.features import features
 from speech_event.asr.hypothesis import Hypothesis
@@ -38,15 +39,7 @@ def padded_as_nemo_does(audio: np.ndarray, sample_rate: int) -> np.ndarray:
 
 class NemoRecognizer:
     def __init__(self, model_directory: Union[str, Path], cuda: bool = False) -> None:
-        directory = Path(model_directory)
-        if directory.suffix == ".nemo":
-            raise ModelError(
-                f"{directory} is a .nemo archive, not an exported model directory: export it once with "
-                f"'speech-event export-nemo {directory} OUT_DIR' (needs the 'export' extra: nemo_toolkit), "
-                "then give OUT_DIR"
-            )
-        if not directory.is_dir():
-            raise ModelError(f"{directory}: no such model directory")
+        directory = exported_directory(model_directory, ".nemo", "export-nemo")
         self._manifest = load_manifest(directory / MANIFEST_FILE)
         self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
         self._model: Union[CtcModel, TransducerModel] = (

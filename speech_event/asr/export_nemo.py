@@ -92,18 +92,26 @@ def vocabulary_lines(tokens: Sequence[str]) -> str:
 def export(nemo_path: Path, out_dir: Path, head: str = "rnnt", family: Optional[str] = None) -> Manifest:
     try:
         import nemo.collections.asr as nemo_asr
-        from omegaconf import OmegaConf
     except ImportError:
         raise ModelError(
             "export-nemo needs NeMo: pip install 'speech-event[export]' (nemo_toolkit and torch); "
             "only for exporting, never on the robot"
         ) from None
     model = nemo_asr.models.ASRModel.restore_from(str(nemo_path), map_location="cpu")
+    return export_model(model, out_dir, head, family, name=str(nemo_path))
+
+
+def export_model(
+    model: Any, out_dir: Path, head: str = "rnnt", family: Optional[str] = None, name: str = "the model"
+) -> Manifest:
+    """A loaded NeMo ASR model to a model directory."""
+    from omegaconf import OmegaConf
+
     model.eval()
     hybrid = hasattr(model, "joint") and hasattr(model, "ctc_decoder")
     ctc = not hasattr(model, "joint") or head == "ctc"
     if head == "ctc" and not (hybrid or ctc):
-        raise ModelError(f"{nemo_path}: a {type(model).__name__} has no CTC head; leave out --head ctc")
+        raise ModelError(f"{name}: a {type(model).__name__} has no CTC head; leave out --head ctc")
     config: Dict[str, Any] = OmegaConf.to_container(model.cfg, resolve=True)
     manifest = manifest_for(config, hybrid, ctc, family)
     if hybrid and ctc:

@@ -24,7 +24,7 @@ from speech_event.asr.whisper_manifest import (
     manifest_json,
     token_lines,
 )
-from speech_event.asr.whisper_model import DECODER_FILE, ENCODER_FILE
+from speech_event.asr.whisper_model import DECODER_FILE, ENCODER_FILE, cross_names
 
 OPSET = 17
 # The node's languages and Whisper's codes for them (Whisper has no Kinyarwanda).
@@ -50,17 +50,19 @@ def parse_language(setting: str) -> Tuple[str, str]:
 
 
 def _wrappers(model: Any) -> Tuple[Any, Any]:
+    """The encoder and decoder as whisper computes them (its qkv_attention: q and k each scaled by
+    head_width ** -0.25, softmax in float32), with the attention's heads split once: each block's
+    cross keys come out split, scaled and transposed, a tensor a block, so a decoding step moves
+    no audio-sized tensor."""
     import torch
     import torch.nn.functional as F
 
-    def attention(q: Any, k: Any, v: Any, heads: int, mask: Any) -> Any:
-        """whisper's qkv_attention, with an explicit mask for the positions after the cache."""
-        batch, length, width = q.shape
-        scale = (width // heads) ** -0.25
-        q = q.view(batch, length, heads, -1).permute(0, 2, 1, 3)
-        k = k.view(batch, k.shape[1], heads, -1).permute(0, 2, 1, 3)
-        v = v.view(batch, v.shape[1], heads, -1).permute(0, 2, 1, 3)
-        scores = (q * scale) @ (k * scale).transpose(-1, -2)
+    def heads_of(x: Any, heads: int) -> Any:
+        """[1, positions, width] -> [1, heads, positions, head width]."""
+        return x.view(x.shape[0], x.shape[1], heads, -1).permute(0, 2, 1, 3)
+
+    def attend(q: Any, k_transposed: Any, v: Any, mask: Any) -> Any:
+        scores = q @ k_transposed
         if mask is not None:
             scores = scores + mask
         weights = F.softmax(scores.float(), dim=-1).to(q.dtype)
@@ -71,39 +73,42 @@ def _wrappers(model: Any) -> Tuple[Any, Any]:
             super().__init__()
             self.encoder, self.blocks = model.encoder, model.decoder.blocks
 
-        def forward(self, mel: Any) -> Tuple[Any, Any]:
+        def forward(self, mel: Any) -> Tuple[Any, ...]:
             audio = self.encoder(mel)
-            keys = torch.stack([block.cross_attn.key(audio) for block in self.blocks])
-            values = torch.stack([block.cross_attn.value(audio) for block in self.blocks])
-            return keys, values
+            cross = []
+            for block in self.blocks:
+                heads = block.cross_attn.n_head
+                scale = (audio.shape[-1] // heads) ** -0.25
+                cross.append(heads_of(block.cross_attn.key(audio), heads).transpose(-1, -2) * scale)
+                cross.append(heads_of(block.cross_attn.value(audio), heads))
+            return tuple(cross)
 
     class Decoder(torch.nn.Module):  # type: ignore[misc]
         def __init__(self) -> None:
             super().__init__()
             self.decoder = model.decoder
 
-        def forward(
-            self, tokens: Any, self_k: Any, self_v: Any, cross_k: Any, cross_v: Any
-        ) -> Tuple[Any, Any, Any]:
+        def forward(self, tokens: Any, self_k: Any, self_v: Any, *cross: Any) -> Tuple[Any, Any, Any]:
             decoder = self.decoder
-            past = self_k.shape[2]
+            past = self_k.shape[3]
             positions = torch.arange(tokens.shape[1]) + past
             x = decoder.token_embedding(tokens) + decoder.positional_embedding[positions]
             keys = torch.arange(past + tokens.shape[1])
             mask = torch.where(keys[None, :] > positions[:, None], float("-inf"), 0.0)
             new_k, new_v = [], []
             for index, block in enumerate(decoder.blocks):
+                heads = block.attn.n_head
+                scale = (x.shape[-1] // heads) ** -0.25
                 h = block.attn_ln(x)
-                k = torch.cat([self_k[index], block.attn.key(h)], dim=1)
-                v = torch.cat([self_v[index], block.attn.value(h)], dim=1)
+                k = torch.cat([self_k[index], heads_of(block.attn.key(h), heads)], dim=2)
+                v = torch.cat([self_v[index], heads_of(block.attn.value(h), heads)], dim=2)
                 new_k.append(k)
                 new_v.append(v)
-                x = x + block.attn.out(attention(block.attn.query(h), k, v, block.attn.n_head, mask))
+                q = heads_of(block.attn.query(h), heads) * scale
+                x = x + block.attn.out(attend(q, (k * scale).transpose(-1, -2), v, mask))
                 h = block.cross_attn_ln(x)
-                query = block.cross_attn.query(h)
-                x = x + block.cross_attn.out(
-                    attention(query, cross_k[index], cross_v[index], block.cross_attn.n_head, None)
-                )
+                q = heads_of(block.cross_attn.query(h), heads) * scale
+                x = x + block.cross_attn.out(attend(q, cross[2 * index], cross[2 * index + 1], None))
                 x = x + block.mlp(block.mlp_ln(x))
             x = decoder.ln(x)
             logits = (x @ decoder.token_embedding.weight.to(x.dtype).T).float()
@@ -120,31 +125,33 @@ def export_model(model: Any, out_dir: Path) -> None:
     encoder, decoder = _wrappers(model)
     mel = torch.zeros(1, dims.n_mels, 2 * dims.n_audio_ctx)
     with torch.no_grad():
-        cross_k, cross_v = encoder(mel)
+        cross = encoder(mel)
+        names = cross_names(dims.n_text_layer)
         torch.onnx.export(
             encoder,
             (mel,),
             str(out_dir / ENCODER_FILE),
             input_names=["mel"],
-            output_names=["cross_k", "cross_v"],
+            output_names=names,
             opset_version=OPSET,
             dynamo=False,
         )
-        cache = torch.zeros(dims.n_text_layer, 1, 2, dims.n_text_state)
+        head_width = dims.n_text_state // dims.n_text_head
+        cache = torch.zeros(dims.n_text_layer, 1, dims.n_text_head, 2, head_width)
         tokens = torch.zeros(1, 3, dtype=torch.long)
         torch.onnx.export(
             decoder,
-            (tokens, cache, cache, cross_k, cross_v),
+            (tokens, cache, cache, *cross),
             str(out_dir / DECODER_FILE),
-            input_names=["tokens", "self_k", "self_v", "cross_k", "cross_v"],
+            input_names=["tokens", "self_k", "self_v", *names],
             output_names=["logits", "new_self_k", "new_self_v"],
             dynamic_axes={
                 "tokens": {1: "tokens"},
-                "self_k": {2: "past"},
-                "self_v": {2: "past"},
+                "self_k": {3: "past"},
+                "self_v": {3: "past"},
                 "logits": {1: "tokens"},
-                "new_self_k": {2: "positions"},
-                "new_self_v": {2: "positions"},
+                "new_self_k": {3: "positions"},
+                "new_self_v": {3: "positions"},
             },
             opset_version=OPSET,
             dynamo=False,

@@ -13,6 +13,7 @@ from typing import List, Optional, Union
 import numpy as np
 import onnxruntime
 
+from speech_event.asr.directory import exported_directory
 from speech_event.asr.errors import ModelError
 from speech_event.asr.whisper_features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
 from speech_event.asr.whisper_greedy import WhisperResult, whisper_greedy
@@ -46,15 +47,7 @@ def pieces_at_quiet_points(audio: np.ndarray) -> List[np.ndarray]:
 
 class WhisperRecognizer:
     def __init__(self, model_directory: Union[str, Path], language: str, cuda: bool = False) -> None:
-        directory = Path(model_directory)
-        if directory.suffix == ".pt":
-            raise ModelError(
-                f"{directory} is a Whisper checkpoint, not an exported model directory: export it once "
-                f"with 'speech-event export-whisper {directory} OUT_DIR' (needs the 'export' extra), "
-                "then give OUT_DIR"
-            )
-        if not directory.is_dir():
-            raise ModelError(f"{directory}: no such model directory")
+        directory = exported_directory(model_directory, ".pt", "export-whisper")
         self._manifest = load_whisper_manifest(directory / MANIFEST_FILE)
         if language not in self._manifest.languages:
             named = ", ".join(sorted(self._manifest.languages)) or "none"

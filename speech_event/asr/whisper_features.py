@@ -20,15 +20,21 @@ CHUNK_FRAMES = CHUNK_SAMPLES // HOP
 
 def whisper_log_mel(audio: np.ndarray, mel_bands: int) -> np.ndarray:
     """[mel_bands, 3000] features of the first 30 s of ``audio`` (16 kHz)."""
-    signal = np.concatenate([np.asarray(audio, dtype=np.float32), np.zeros(CHUNK_SAMPLES, np.float32)])
-    padded = np.pad(signal.astype(np.float64), N_FFT // 2, mode="reflect")
-    frames = 1 + (padded.size - N_FFT) // HOP
+    audio = np.asarray(audio, dtype=np.float32)[:CHUNK_SAMPLES]
+    # Frames whose window lies wholly in the silence after the audio have no power at all: only
+    # the frames that see the audio are computed, the others are the floor (as whisper finds them).
+    seen = min(CHUNK_FRAMES, (audio.size + N_FFT // 2) // HOP + 1)
+    signal = np.zeros(seen * HOP + N_FFT, np.float64)
+    signal[N_FFT // 2 : N_FFT // 2 + audio.size] = audio
+    # whisper's reflect padding at the start (the end is the padding's silence, reflected)
+    signal[: N_FFT // 2] = signal[N_FFT : N_FFT // 2 : -1]
     window = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(N_FFT) / N_FFT)  # torch.hann_window: periodic
-    starts = np.arange(frames - 1) * HOP  # the last frame is dropped, as whisper drops it
-    framed = padded[starts[:, None] + np.arange(N_FFT)[None, :]] * window
+    starts = np.arange(seen) * HOP
+    framed = signal[starts[:, None] + np.arange(N_FFT)[None, :]] * window
     power = np.square(np.abs(np.fft.rfft(framed, axis=1)))
-    mel = mel_filterbank(SAMPLE_RATE, N_FFT, mel_bands).astype(np.float32).astype(np.float64) @ power.T
-    log_spec = np.log10(np.maximum(mel, 1e-10))
+    filters = mel_filterbank(SAMPLE_RATE, N_FFT, mel_bands).astype(np.float32).astype(np.float64)
+    log_spec = np.full((mel_bands, CHUNK_FRAMES), -10.0)  # log10 of the 1e-10 floor
+    log_spec[:, :seen] = np.log10(np.maximum(filters @ power.T, 1e-10))
     log_spec = np.maximum(log_spec, log_spec.max() - 8.0)
-    features: np.ndarray = ((log_spec[:, :CHUNK_FRAMES] + 4.0) / 4.0).astype(np.float32)
+    features: np.ndarray = ((log_spec + 4.0) / 4.0).astype(np.float32)
     return features
