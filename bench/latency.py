@@ -1,13 +1,11 @@
-"""How soon the text comes after the speaker stops (python -m bench.latency), issue 11.
+"""How soon the text comes after the speaker stops (python -m bench.latency [ENGINE ...]), issue 11.
 
 (a) In memory, in real time (the wall clock, the thread executor): for each engine and utterances
     of 1, 3, 5 and 10 s, the time from the last block to the text at a subscriber, minus the
     pause (1.5 s), median and max of 3 runs, without and with speculative recognition. The blocks
     of an utterance are published at once (the latency counts from the last one); the speculation
-    starts 0.3 s after it. Each run's node first transcribes the same utterance once, unmeasured,
-    as a node on the robot has (an engine that cannot be stopped speculates only once timed).
-    Target with speculation: pause + 50 ms or less whenever recognition takes less than the pause
-    minus the gap (1.2 s).
+    starts 0.3 s after it. Target with speculation: pause + 50 ms or less whenever recognition
+    takes less than the pause minus the gap (1.2 s).
 (b) Early end of turn (early_pause 0.5 s): "yes" in the tones voice, time from the last block to the
     text (target 0.5 s).
 (c) Engine time spent on speculations that more speech made worthless, per hour of speech: 200
@@ -15,8 +13,8 @@
     gap: a speculation starts and the next word discards it), on the fake clock with the engine
     run for real; every speculation runs to its end there, so this is the most it can cost.
 
-Pocketsphinx cannot be stopped: the node speculates with it only when its measured run time ends
-before the pause does (grammar mode always; the language model on short utterances).
+Pocketsphinx cannot be stopped, and its texts depend on what it heard before, so the node does
+not speculate with it: its two figures show that.
 Engines: the fake (tones) recognizer, the NeMo engine on the tones fixture model, pocketsphinx
 with a grammar and with its language model, and the large conformer: with
 SPEECH_EVENT_LARGE_MODEL=DIR, the NeMo engine on the random-weight 119 M-parameter model that
@@ -28,6 +26,7 @@ bench/nemo_parity.py builds and exports (it needs NeMo; the exported directory i
 import dataclasses
 import os
 import statistics
+import sys
 import tempfile
 import threading
 import time
@@ -106,21 +105,19 @@ def _latency(recognizer: Recognizer, config: SpeechEventConfig, audio: np.ndarra
     node = SpeechEventNode(quiet, bus, clock, recognizer, executor)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     node.start()
-    for _ in range(2):  # the first times the engine; its text comes after the pause, so the
-        heard.clear()  # second is a new utterance
-        arrived.clear()
-        for start in range(0, audio.size, BLOCK):
-            sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
-        last_block = time.monotonic()
-        heard.wait(60.0)
+    for start in range(0, audio.size, BLOCK):
+        sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+    last_block = time.monotonic()
+    heard.wait(60.0)
     node.stop()
     executor.shutdown(60.0)
     return arrived[0] - last_block - config.speech_pause_period
 
 
 def _engines(work: Path) -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
+    """Every engine, or those whose names hold one of the words given on the command line."""
     grammar = str(COMMANDS)
-    return {
+    engines: Dict[str, Tuple[Callable[[], Recognizer], str]] = {
         "fake (tones)": (ToneRecognizer, "tones"),
         "NeMo engine, tones fixture model": (
             lambda: NemoRecognizer(build_tones_model(work / "tones")),
@@ -130,6 +127,8 @@ def _engines(work: Path) -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
         "pocketsphinx language model": (SphinxRecognizer, "tts"),
         **_large_conformer(),
     }
+    wanted = sys.argv[1:]
+    return {name: engine for name, engine in engines.items() if not wanted or any(w in name for w in wanted)}
 
 
 def _large_conformer() -> Dict[str, Tuple[Callable[[], Recognizer], str]]:

@@ -56,7 +56,7 @@ from speech_event.ports import (
 from speech_event.recognition_queue import RecognitionJob, RecognitionOutcome, RecognitionQueue
 from speech_event.rejections import RejectionLog
 from speech_event.resample import resample
-from speech_event.speculation import RunTimes, Speculation, SpeculationCounts, complete_answers, is_complete
+from speech_event.speculation import Speculation, SpeculationCounts, complete_answers, is_complete
 from speech_event.speech_screen import Discard, SpeechScreen, speech_screen_for
 from speech_event.storage import StoredUtterance, UtteranceStore
 from speech_event.transcript_text import checked_transcript, text_to_publish
@@ -66,9 +66,6 @@ _LOG = logging.getLogger("speech_event")
 # A timer may fire a little early (RosClock fires 0.1 ms early against nanosecond rounding); a
 # pause timer that fires within this of its time has come due, rather than being set again.
 TIMER_TOLERANCE = 1e-3
-# An engine that cannot be stopped speculates only when its expected run time, times this, ends
-# before the utterance could close: room for a machine busier than when it was timed.
-RUN_TIME_MARGIN = 1.25
 
 
 class SpeechEventNode:
@@ -125,15 +122,11 @@ class SpeechEventNode:
         self._pause_timer: Optional[Timer] = None
         # Speculative recognition (speech_event/speculation.py): at most one speculation at a time.
         self._speculation: Optional[Speculation] = None
-        # A speculation made worthless that runs on to its end (its engine cannot be stopped): the
-        # worker is not idle until it ends.
-        self._worthless: Optional[Speculation] = None
         self._gap_timer: Optional[Timer] = None
         self._last_speculated: Optional[str] = None  # the text of this utterance's last speculation
         self._ends_early = False  # this utterance's speculation is a complete answer (early_pause)
         self._answers = complete_answers(config.complete_answers)
         self.speculations = SpeculationCounts()
-        self._run_times = RunTimes()
         self._utterances = 0
         self._sound_detection = PublisherStatus.CONNECTED  # as the last health check found it
         self._text_publisher: Optional[Publisher] = None
@@ -285,43 +278,27 @@ class SpeechEventNode:
 
     def _maybe_speculate(self) -> None:
         """Under the lock: speculate on the utterance being collected if its gap has passed, the
-        worker is idle (closed utterances first) and nothing is speculated on yet. An engine that
-        cannot be stopped would run a speculation made worthless to its end, and an utterance
-        closing meanwhile would wait for it: it speculates only when it surely ends in time."""
+        worker is idle (closed utterances first) and nothing is speculated on yet. Only with an
+        engine that can be stopped: one that cannot would run a speculation made worthless to its
+        end, and an utterance closing meanwhile would wait for it (pocketsphinx, whose texts also
+        depend on what it heard before: see the README)."""
         stoppable = callable(getattr(self._recognizer, "cancel", None))
-        wanted = self._config.speculative_recognition and self._enabled
+        wanted = self._config.speculative_recognition and stoppable and self._enabled
         wanted = wanted and self._assembler.pending_samples > 0
-        idle = self._running is None and self._queue.waiting == 0
-        idle = idle and self._speculation is None and self._worthless is None
+        idle = self._running is None and self._queue.waiting == 0 and self._speculation is None
         gap = self._last_arrival + self._config.speculation_gap
         if not (wanted and idle and self._gap_timer is None and self._clock.now() >= gap - TIMER_TOLERANCE):
-            return
-        if not (stoppable or self._ends_before_any_close()):
             return
         audio = self._assembler.peek()
         speculation = Speculation(audio.size, self._recognizer)
         self._speculation = speculation
         self.speculations.started += 1
-        speculation.handle = self._executor.submit(
-            functools.partial(self._speculate, speculation, audio), stoppable=stoppable
-        )
-
-    def _ends_before_any_close(self) -> bool:
-        """Under the lock: whether a speculation started now ends, by the engine's recent run times,
-        before the utterance being collected could close: the pause after its last block (a new
-        block only moves that later), or the length limit with audio coming in real time."""
-        seconds = self._assembler.pending_samples / self._config.sample_rate
-        expected = self._run_times.expected(self._recognizer, seconds)
-        if expected is None:  # not timed yet: the first utterance is recognized as it closes
-            return False
-        until_pause = self._last_arrival + self._config.speech_pause_period - self._clock.now()
-        until_cut = self._config.max_utterance_length - seconds
-        return expected * RUN_TIME_MARGIN <= min(until_pause, until_cut)
+        speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
 
     def _speculate(self, speculation: Speculation, audio: np.ndarray) -> None:
         """An executor job: transcribe the utterance so far; publish it only if it closed as it is."""
         with self._lock:
-            if speculation.cancelled and not speculation.runs_on:
+            if speculation.cancelled:
                 return
             speculation.running = True
         outcome = self._recognize(audio, speculation.recognizer)
@@ -331,7 +308,6 @@ class SpeechEventNode:
                 speculation.watchdog.cancel()
             if speculation.cancelled:
                 self.speculations.wasted_seconds += outcome.took
-                self._worker_freed_by(speculation)
                 return
             speculation.outcome = outcome
             job = speculation.adopted
@@ -341,12 +317,6 @@ class SpeechEventNode:
             self._speculation = None
             self.speculations.used += 1
         self._conclude(job, outcome)
-
-    def _worker_freed_by(self, speculation: Speculation) -> None:
-        """Under the lock: a worthless speculation ended; the utterance being collected may now."""
-        if self._worthless is speculation:
-            self._worthless = None
-            self._maybe_speculate()
 
     def _note_speculated(self, speculation: Speculation, outcome: RecognitionOutcome) -> None:
         """Under the lock: a complete answer ends the turn after early_pause, not the whole pause."""
@@ -372,8 +342,7 @@ class SpeechEventNode:
         if speculation is None or speculation.adopted is not None:
             return
         self._speculation = None
-        if speculation.cancel():
-            self._worthless = speculation
+        speculation.cancel()
         if speculation.outcome is not None:
             self.speculations.wasted_seconds += speculation.outcome.took
 
@@ -461,17 +430,13 @@ class SpeechEventNode:
     def _recognize(self, audio: np.ndarray, recognizer: Recognizer) -> RecognitionOutcome:
         """Resample, screen, transcribe (for a closed utterance or a speculation)."""
         try:
-            arrived = self._stopwatch()
             speech = resample(audio, self._config.sample_rate, recognizer.sample_rate)
             discard = self._screen.discard(speech, recognizer.sample_rate)
             if discard is not None:
                 return RecognitionOutcome(discard=discard)
             began = self._stopwatch()
             answer = recognizer.transcribe(speech)
-            ended = self._stopwatch()
-            with self._lock:  # the whole run, resampling and screening too, bounds a speculation's
-                self._run_times.record(recognizer, audio.size / self._config.sample_rate, ended - arrived)
-            return RecognitionOutcome(answer, took=ended - began)
+            return RecognitionOutcome(answer, took=self._stopwatch() - began)
         # A failed recognition must not stop the node; SystemExit from an engine is a failure like
         # any other. It is said when the utterance concludes (a cancelled speculation never does).
         except (Exception, SystemExit) as problem:

@@ -88,20 +88,17 @@ class Clock(Protocol):
 
 
 class Cancellable(Protocol):
-    def cancel(self) -> bool:
-        """Do not run the job if it has not started: True. False: it started and runs on (to its
-        end, or until its engine is stopped)."""
+    def cancel(self) -> None:
+        """Do not run the job if it has not started (a started one runs on)."""
         ...
 
 
 class Executor(Protocol):
     """Runs jobs off the subscriber callback, one at a time, in submission order."""
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True, stoppable: bool = True) -> Cancellable:
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> Cancellable:
         """``recognizes``: the job runs a speech engine (a simulated worker charges recognition
-        time for it); False for one that only publishes a result already there. ``stoppable``: its
-        engine stops when cancelled (a simulated worker is free at once when such a started job is
-        cancelled; otherwise only when the job would have ended)."""
+        time for it); False for one that only publishes a result already there."""
         ...
 
 

@@ -9,18 +9,12 @@ is cancelled (with the engine's ``cancel`` where it has one, onnxruntime's RunOp
 and its engine time counted as wasted. A speculation never publishes by itself, so the node
 publishes exactly the texts it would publish without speculating, never later.
 
-An engine that cannot be stopped (pocketsphinx) speculates only when its run time, as measured on
-recent recognitions, says the speculation ends before the utterance could close: before the pause
-after the last block, and before the length limit could cut it (audio arriving in real time).
-Then no closed utterance ever waits for a speculation that more audio made worthless.
-
 Early end of turn (``early_pause``, opt-in) builds on it: a speculation whose text is a complete
 answer lets the pause end after ``early_pause`` instead of ``speech_pause_period``.
 """
 
-from collections import deque
 from dataclasses import dataclass
-from typing import Deque, Dict, FrozenSet, Optional, Tuple
+from typing import FrozenSet, Optional
 
 from speech_event.ports import Cancellable, Recognizer, Timer
 from speech_event.recognition_queue import RecognitionJob, RecognitionOutcome
@@ -44,7 +38,6 @@ class Speculation:
         self.handle: Optional[Cancellable] = None
         self.running = False
         self.cancelled = False
-        self.runs_on = False  # cancelled after it started, with an engine that cannot be stopped
         self.outcome: Optional[RecognitionOutcome] = None
         # The closed utterance this speculation turned out to be, while it still runs: the
         # speculation's end publishes it.
@@ -56,41 +49,14 @@ class Speculation:
         audio this speculation transcribes."""
         return not self.cancelled and self.samples == samples and self.recognizer is recognizer
 
-    def cancel(self) -> bool:
-        """Superseded: never run it, or stop it where the engine allows. True when it runs on to
-        its end (it started, and its engine cannot be stopped): the worker is busy until then."""
+    def cancel(self) -> None:
+        """Superseded: never run it, or stop it where the engine allows."""
         self.cancelled = True
-        started = self.handle is not None and not self.handle.cancel()
+        if self.handle is not None:
+            self.handle.cancel()
         stop = getattr(self.recognizer, "cancel", None)
-        if stop is None:
-            self.runs_on = started
-            return started
-        if self.running:
+        if self.running and stop is not None:
             stop()
-        return False
-
-
-class RunTimes:
-    """How long each engine took on its recent recognitions, to bound how long a speculation of a
-    given length will take. Conservative both ways: an utterance at least as long as a recent one
-    takes that one's time scaled up by length; a shorter one takes no less than it did."""
-
-    KEPT = 20  # recent enough to forget a first, cold run; enough to catch a slow one
-
-    def __init__(self) -> None:
-        # Keyed by the engine's identity: engines are built once and kept (speech_event/engines.py).
-        self._recent: Dict[int, Deque[Tuple[float, float]]] = {}
-
-    def record(self, recognizer: Recognizer, audio_seconds: float, took: float) -> None:
-        if audio_seconds > 0:
-            self._recent.setdefault(id(recognizer), deque(maxlen=self.KEPT)).append((audio_seconds, took))
-
-    def expected(self, recognizer: Recognizer, audio_seconds: float) -> Optional[float]:
-        """Seconds a transcription of ``audio_seconds`` should take at most; None before any was timed."""
-        recent = self._recent.get(id(recognizer))
-        if not recent:
-            return None
-        return max(took * max(1.0, audio_seconds / seconds) for seconds, took in recent)
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:

@@ -1,14 +1,13 @@
 """Speculative recognition (issue 11): the same texts as without it, never later.
 
 The node runs twice on the same timeline of blocks, on the fake clock with the simulated worker
-(each recognition takes ``recognition_seconds`` of clock time, and as long on the node's
-stopwatch; a speculation is a recognition too): once with speculative_recognition false, once true.
+(each recognition takes ``recognition_seconds`` of clock time; a speculation is a recognition
+too): once with speculative_recognition false, once true.
 """
 
 import dataclasses
-import itertools
 from pathlib import Path
-from typing import Callable, List, Optional, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 import pytest
@@ -16,7 +15,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
-from fixtures.tts import speak_tts
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome, Published
 from harness.scenario import load_scenario
@@ -25,9 +23,8 @@ from speech_event.adapters.executors import ClockExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Recognizer, Transcript
-from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
-from speech_event.speculation import RunTimes, complete_answers, is_complete
+from speech_event.speculation import complete_answers, is_complete
 from tests.application import ROOT
 from tests.rig import Rig
 
@@ -36,9 +33,8 @@ PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculat
 SPECULATING = dataclasses.replace(PLAIN, speculative_recognition=True)
 
 
-class UnstoppableDigest:
-    """Answers with what identifies the audio exactly: a different utterance, a different text.
-    It has no ``cancel``: a speculation it started runs to its end (as pocketsphinx)."""
+class AudioDigest:
+    """Answers with what identifies the audio exactly: a different utterance, a different text."""
 
     sample_rate = RATE
 
@@ -49,32 +45,26 @@ class UnstoppableDigest:
         self.calls += 1
         return Transcript(f"{audio.size} {float(np.sum(audio.astype(np.float64))):.6f}")
 
-
-class AudioDigest(UnstoppableDigest):
     def cancel(self) -> None:
         """Stops at once (the simulated worker is free when a speculation is cancelled)."""
+
+
+class Uncancellable:
+    sample_rate = RATE
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        return Transcript("heard")
 
 
 def _rounded(rig: Rig) -> List[Tuple[float, str]]:
     return [(round(time, 6), text) for time, text in rig.published]
 
 
-def stopwatch_of(recognition_seconds: float) -> Callable[[], float]:
-    """The node reads its stopwatch as a recognition starts, before the engine runs and after it:
-    on this one each recognition takes ``recognition_seconds``, as on the simulated worker."""
-    ticks = itertools.count(0.0, recognition_seconds / 2)
-    return lambda: next(ticks)
-
-
-def test_run_times_bound_a_longer_utterance_by_length_and_a_shorter_by_the_time_taken() -> None:
-    engine, other = AudioDigest(), AudioDigest()
-    run_times = RunTimes()
-    assert run_times.expected(engine, 1.0) is None
-    run_times.record(engine, 2.0, 0.5)
-    run_times.record(engine, 1.0, 0.1)
-    assert run_times.expected(engine, 1.0) == 0.5
-    assert run_times.expected(engine, 8.0) == 2.0
-    assert run_times.expected(other, 1.0) is None
+def test_an_engine_that_cannot_be_stopped_is_not_speculated_with() -> None:
+    rig = Rig(SPECULATING, Uncancellable(), job_seconds=1.0)
+    rig.sound_detection.publish(Float32MultiArray(data=np.full(100, 0.1, dtype=np.float32)))
+    rig.clock.advance(5.0)
+    assert rig.node.speculations.started == 0
 
 
 Block = Tuple[float, int]  # (seconds since the previous block, samples)
@@ -92,8 +82,7 @@ def _published(
     recognition_seconds: float,
     recognizer: Optional[Recognizer] = None,
 ) -> List[Tuple[float, str]]:
-    stopwatch = stopwatch_of(recognition_seconds)
-    rig = Rig(config, recognizer or AudioDigest(), job_seconds=recognition_seconds, stopwatch=stopwatch)
+    rig = Rig(config, recognizer or AudioDigest(), job_seconds=recognition_seconds)
     assert isinstance(rig.executor, ClockExecutor)
     rng = np.random.default_rng(7)
     for gap, size in timeline:
@@ -106,15 +95,12 @@ def _published(
 
 
 @settings(max_examples=300, deadline=None)
-@given(timelines, st.sampled_from([0.0, 0.05, 0.2, 0.8, 1.3, 3.0]), st.booleans())
+@given(timelines, st.sampled_from([0.0, 0.05, 0.2, 0.8, 1.3, 3.0]))
 def test_with_speculation_the_same_texts_are_published_each_no_later(
-    timeline: List[Block], recognition_seconds: float, stoppable: bool
+    timeline: List[Block], recognition_seconds: float
 ) -> None:
-    """Engines that stop when cancelled, and engines that do not (they speculate only when their
-    run time fits in the pause)."""
-    engine = AudioDigest if stoppable else UnstoppableDigest
-    plain = _published(PLAIN, timeline, recognition_seconds, engine())
-    speculating = _published(SPECULATING, timeline, recognition_seconds, engine())
+    plain = _published(PLAIN, timeline, recognition_seconds, AudioDigest())
+    speculating = _published(SPECULATING, timeline, recognition_seconds, AudioDigest())
     assert [text for _, text in speculating] == [text for _, text in plain]
     assert all(fast <= slow + 1e-9 for (fast, _), (slow, _) in zip(speculating, plain))
 
@@ -151,54 +137,6 @@ def test_a_block_after_the_gap_cancels_the_speculation_and_the_worker_is_free_at
     rig.clock.advance(5.0)
     assert recognizer.calls == 1  # the second speculation, used for the closed utterance
     assert (rig.node.speculations.started, rig.node.speculations.used) == (2, 1)
-
-
-def _timed_unstoppable(recognition_seconds: float) -> Tuple[Rig, UnstoppableDigest]:
-    """A node whose engine cannot be stopped, after one utterance (0.1 s at 0.0 s) timed it."""
-    recognizer = UnstoppableDigest()
-    rig = Rig(
-        SPECULATING, recognizer, job_seconds=recognition_seconds, stopwatch=stopwatch_of(recognition_seconds)
-    )
-    rig.sound_detection.publish(Float32MultiArray(data=np.full(1600, 0.1, dtype=np.float32)))
-    rig.clock.advance(5.0)
-    assert rig.node.speculations.started == 0  # its run time was not known yet
-    assert _rounded(rig) == [(round(1.5 + recognition_seconds, 6), "1600 160.000002")]
-    return rig, recognizer
-
-
-def test_an_engine_that_cannot_be_stopped_speculates_once_timed_when_it_ends_before_the_pause() -> None:
-    rig, _ = _timed_unstoppable(0.4)
-    _block(rig, 0.1)  # at 5.0 s: speculated from 5.3 s to 5.7 s, the pause ends at 6.5 s
-    rig.clock.advance(2.0)
-    assert (rig.node.speculations.started, rig.node.speculations.used) == (1, 1)
-    assert _rounded(rig)[1] == (6.5, "100 10.000000")
-
-
-def test_an_engine_that_cannot_be_stopped_does_not_speculate_when_it_might_still_run_as_the_pause_ends() -> (
-    None
-):
-    rig, _ = _timed_unstoppable(1.0)  # 1.0 s with the margin (1.25 s) is over pause - gap (1.2 s)
-    _block(rig, 0.1)
-    rig.clock.advance(3.0)
-    assert rig.node.speculations.started == 0
-    assert _rounded(rig)[1] == (7.5, "100 10.000000")
-
-
-def test_a_speculation_that_cannot_be_stopped_runs_on_and_holds_the_worker_to_its_end() -> None:
-    rig, recognizer = _timed_unstoppable(0.9)  # 0.9 s with the margin fits in pause - gap (1.2 s)
-    assert isinstance(rig.executor, ClockExecutor)
-    _block(rig, 0.1)
-    rig.clock.advance(0.4)  # speculating from 5.3 s to 6.2 s
-    _block(rig, 0.2)  # at 5.4 s: worthless, but it runs on, holding the worker
-    assert rig.executor.free_at == pytest.approx(6.2)
-    rig.clock.advance(0.4)  # 5.8 s: the gap after 5.4 s passed, but the worker is not idle
-    assert rig.node.speculations.started == 1
-    rig.clock.advance(0.45)  # 6.25 s: it ended; 0.65 s left of the pause is too little to speculate
-    assert (rig.node.speculations.started, recognizer.calls) == (1, 2)
-    assert rig.node.speculations.wasted_seconds == pytest.approx(0.45)  # its engine time, on this stopwatch
-    rig.clock.advance(2.0)
-    assert _rounded(rig)[1] == (7.8, "200 30.000000")  # 0.9 s after the pause at 6.9 s
-    assert rig.node.speculations.started == 1
 
 
 def _errors(outcome: Outcome) -> List[Tuple[float, str]]:
@@ -295,23 +233,3 @@ def test_what_was_speculated_before_the_node_was_disabled_does_not_end_the_next_
     last = rig.clock.now()
     rig.clock.advance(2.0)
     assert _rounded(rig) == [(round(last + 1.5, 6), "go left")]  # the whole pause: one speculation only
-
-
-COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
-
-
-def test_in_grammar_mode_pocketsphinx_ends_the_turn_early_pause_after_a_whole_phrase() -> None:
-    """pocketsphinx cannot be stopped: it speculates once timed (here each run takes 0.2 s of the
-    simulated worker), and any text it gives in grammar mode is a whole phrase of the grammar."""
-    config = dataclasses.replace(EARLY, language="english")
-    rig = Rig(config, SphinxRecognizer(grammar=str(COMMANDS)), job_seconds=0.2, stopwatch=stopwatch_of(0.2))
-    rig.speak(speak_tts("go to the kitchen", RATE))
-    first = rig.clock.now()
-    rig.clock.advance(3.0)  # not timed yet: recognized when the whole pause ends
-    rig.speak(speak_tts("stop", RATE))
-    second = rig.clock.now()
-    rig.clock.advance(3.0)
-    assert _rounded(rig) == [
-        (round(first + 1.5 + 0.2, 6), "go to the kitchen"),
-        (round(second + 0.5, 6), "stop"),
-    ]

@@ -12,18 +12,15 @@ _LOG = logging.getLogger("speech_event")
 
 class _ClockJob:
     """A job of the simulated worker: it occupies the worker from ``start`` to ``finish``, and
-    runs at ``finish``. Cancelled before it starts, or while it runs when its engine stops, it
-    never runs, and a worker it was the last job of is free again at once. Cancelled while it
-    runs with an engine that cannot be stopped, it holds the worker to its end (and runs then:
-    the job sees it was cancelled)."""
+    runs at ``finish``. Cancelled before then, it never runs, and a worker it was the last job of
+    is free again at once."""
 
     def __init__(
-        self, executor: "ClockExecutor", job: Callable[[], None], start: float, finish: float, stoppable: bool
+        self, executor: "ClockExecutor", job: Callable[[], None], start: float, finish: float
     ) -> None:
         self._executor = executor
         self._job = job
         self.start, self.finish = start, finish
-        self._stoppable = stoppable
         self.done = False
         self.timer = executor.clock.call_at(finish, self._run)
 
@@ -31,16 +28,13 @@ class _ClockJob:
         self.done = True
         self._job()
 
-    def cancel(self) -> bool:
+    def cancel(self) -> None:
         if self.done:
-            return True
-        if not self._stoppable and self._executor.clock.now() > self.start:
-            return False
+            return
         self.done = True
         self.timer.cancel()
         if self._executor.free_at == self.finish:
             self._executor.release(max(self.start, self._executor.clock.now()))
-        return True
 
 
 class ClockExecutor:
@@ -65,29 +59,20 @@ class ClockExecutor:
         """The last job was cancelled: the worker is free from ``when``."""
         self._free_at = when
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True, stoppable: bool = True) -> _ClockJob:
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ClockJob:
         start = max(self._free_at, self.clock.now())
         finish = start + (self._job_seconds if recognizes else 0.0)
         self._free_at = finish
-        return _ClockJob(self, job, start, finish, stoppable)
+        return _ClockJob(self, job, start, finish)
 
 
 class _ThreadJob:
     def __init__(self, job: Callable[[], None]) -> None:
         self.job = job
-        self._lock = threading.Lock()  # the worker starts it while another thread may cancel it
-        self._started = self._cancelled = False
+        self.cancelled = False
 
-    def cancel(self) -> bool:
-        with self._lock:
-            self._cancelled = not self._started
-            return self._cancelled
-
-    def start(self) -> bool:
-        """The worker takes it: False when it was cancelled first."""
-        with self._lock:
-            self._started = not self._cancelled
-            return self._started
+    def cancel(self) -> None:
+        self.cancelled = True
 
 
 class ThreadExecutor:
@@ -99,7 +84,7 @@ class ThreadExecutor:
         self._thread = threading.Thread(target=self._work, name=name, daemon=True)
         self._thread.start()
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True, stoppable: bool = True) -> _ThreadJob:
+    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ThreadJob:
         handle = _ThreadJob(job)
         self._jobs.put(handle)
         return handle
@@ -115,7 +100,7 @@ class ThreadExecutor:
             handle = self._jobs.get()
             if handle is None:
                 return
-            if not handle.start():
+            if handle.cancelled:
                 continue
             try:
                 handle.job()
