@@ -25,8 +25,8 @@ from speech_event.messages import Float32MultiArray
 from speech_event.ports import Recognizer, Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.speculation import complete_answers, is_complete
-from tests.application import ROOT
 from tests.rig import Rig
+from tests.scenario_files import SCENARIOS
 
 RATE = 16000
 PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)
@@ -148,7 +148,7 @@ def _transcripts(outcome: Outcome) -> List[Published]:
 
 
 @pytest.mark.parametrize("recognition_seconds", [0.0, 1.0])
-@pytest.mark.parametrize("path", sorted((ROOT / "scenarios").glob("*.toml")), ids=lambda path: path.stem)
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
 def test_every_scenario_publishes_the_same_with_and_without_speculation(
     path: Path, recognition_seconds: float
 ) -> None:

@@ -17,7 +17,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import onnxruntime
 
-from speech_event.asr.onnx_session import check_tensors, open_session, providers
+from speech_event.asr.onnx_session import check_tensors, last_dimension, open_session, providers
 
 ENCODER_FILE = "encoder-model.onnx"
 DECODER_JOINT_FILE = "decoder_joint-model.onnx"
@@ -67,8 +67,7 @@ class TransducerModel:
     @property
     def logits_size(self) -> Optional[int]:
         """The decoder-joint's logits per step when the file says (V + 1, plus TDT's durations)."""
-        size = next(arg.shape[-1] for arg in self._decoder_joint.get_outputs() if arg.name == "outputs")
-        return size if isinstance(size, int) else None
+        return last_dimension(self._decoder_joint, "outputs")
 
     def encode(self, features: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> np.ndarray:
         """[features, T] -> encoder frames [T', D]. ``run.terminate`` stops it (it raises)."""
@@ -116,8 +115,7 @@ class CtcModel:
 
     @property
     def logits_size(self) -> Optional[int]:
-        size = self._model.get_outputs()[0].shape[-1]
-        return size if isinstance(size, int) else None
+        return last_dimension(self._model, "logprobs")
 
     def logits(self, features: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> np.ndarray:
         """[features, T] -> per-frame log-probabilities [T', V + 1]."""

@@ -3,7 +3,7 @@ missing or unloadable file, and the check of a file's tensor names and ranks."""
 
 import logging
 from pathlib import Path
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import onnxruntime
 
@@ -34,6 +34,12 @@ def open_session(
         return onnxruntime.InferenceSession(str(path), options, providers=execution_providers)
     except Exception as problem:  # onnxruntime raises its own exception types
         raise ModelError(f"{path}: onnxruntime cannot load it: {problem}") from None
+
+
+def last_dimension(session: onnxruntime.InferenceSession, output: str) -> Optional[int]:
+    """The size of ``output``'s last dimension when the file fixes it (logits per step), else None."""
+    size = next(arg.shape[-1] for arg in session.get_outputs() if arg.name == output)
+    return size if isinstance(size, int) else None
 
 
 def _describe(expected: Dict[str, int]) -> str:

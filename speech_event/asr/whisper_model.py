@@ -17,7 +17,7 @@ import numpy as np
 import onnxruntime
 
 from speech_event.asr.errors import ModelError
-from speech_event.asr.onnx_session import check_tensors, open_session, providers
+from speech_event.asr.onnx_session import check_tensors, last_dimension, open_session, providers
 
 ENCODER_FILE = "encoder.onnx"
 DECODER_FILE = "decoder.onnx"
@@ -40,7 +40,7 @@ class WhisperModel:
         execution_providers = providers(cuda)
         encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_FILE
         self._encoder = open_session(encoder_path, execution_providers, WHISPER_DIRECTORY)
-        self._decoder = open_session(decoder_path, execution_providers, WHISPER_DIRECTORY)
+        self.decoder = open_session(decoder_path, execution_providers, WHISPER_DIRECTORY)
         layers = sum(1 for arg in self._encoder.get_outputs() if arg.name.startswith("cross_k_"))
         if layers == 0:
             raise ModelError(
@@ -51,15 +51,14 @@ class WhisperModel:
         check_tensors(encoder_path, "inputs", self._encoder.get_inputs(), ENCODER_INPUTS, EXPORTER)
         check_tensors(encoder_path, "outputs", self._encoder.get_outputs(), cross, EXPORTER)
         check_tensors(
-            decoder_path, "inputs", self._decoder.get_inputs(), {**DECODER_INPUTS, **cross}, EXPORTER
+            decoder_path, "inputs", self.decoder.get_inputs(), {**DECODER_INPUTS, **cross}, EXPORTER
         )
-        check_tensors(decoder_path, "outputs", self._decoder.get_outputs(), DECODER_OUTPUTS, EXPORTER)
+        check_tensors(decoder_path, "outputs", self.decoder.get_outputs(), DECODER_OUTPUTS, EXPORTER)
         self._cross_names = list(cross)
 
     @property
     def vocabulary_size(self) -> Optional[int]:
-        size = self._decoder.get_outputs()[0].shape[-1]
-        return size if isinstance(size, int) else None
+        return last_dimension(self.decoder, "logits")
 
     def encode(self, mel: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> Dict[str, np.ndarray]:
         """Each block's cross-attention keys and values, by the decoder's input names."""
@@ -76,7 +75,7 @@ class DecoderSession:
         cross: Dict[str, np.ndarray],
         run: Optional[onnxruntime.RunOptions] = None,
     ) -> None:
-        self._decoder = model._decoder
+        self._decoder = model.decoder
         self._cross = cross
         _, heads, _, head_width = cross["cross_v_0"].shape
         layers = len(cross) // 2

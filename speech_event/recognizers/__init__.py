@@ -12,13 +12,13 @@ from typing import Callable, Dict
 
 from speech_event.asr.errors import ModelError
 from speech_event.asr.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES, family_of
+from speech_event.asr.whisper_manifest import WHISPER
 from speech_event.config import SpeechEventConfig
 from speech_event.engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
 RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
-WHISPER = "whisper"
 
 
 def _model_directory(config: SpeechEventConfig) -> Path:
