@@ -6,13 +6,14 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Dict, Iterator, Optional
+from typing import Dict, Iterator, List, Optional
 
 import pytest
 import rosgraph
 import rospy
 
 from harness.ros_runner import Processes, free_port
+from speech_event import SOUND_DETECTION_DOWN
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -30,11 +31,20 @@ def ros_environment(master_port: int, tmp_path: Path) -> Dict[str, str]:
     return environment
 
 
-def wait_for(condition, what: str, timeout: float = 30.0) -> None:  # type: ignore[no-untyped-def]
+def spoken(texts: List[str]) -> List[str]:
+    """The texts but soundDetection's outage reports: the node publishes one every health-check
+    period while no driver publishes yet (or any longer), so how many depends on how fast the
+    processes start on a loaded machine."""
+    return [text for text in texts if text != SOUND_DETECTION_DOWN]
+
+
+def wait_for(condition, what: str, timeout: float = 30.0, seen=None) -> None:  # type: ignore[no-untyped-def]
+    """Poll ``condition``; on giving up, say what was awaited and, with ``seen``, what there was."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError(f"gave up after {timeout:.0f} s waiting for {what}")
+            found = f"; instead: {seen()}" if seen is not None else ""
+            raise AssertionError(f"gave up after {timeout:.0f} s waiting for {what}{found}")
         time.sleep(0.01)
 
 

@@ -22,7 +22,7 @@ from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
 from tests.application import APPLICATION
-from tests.ros.conftest import ROOT, wait_for
+from tests.ros.conftest import ROOT, spoken, wait_for
 
 
 def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:
@@ -104,7 +104,14 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
             timeout=60,
         )
         assert driver.returncode == 0, driver.stderr
-        wait_for(lambda: texts == ["open the door"], "the text", 30)
+        wait_for(
+            lambda: spoken(texts) == ["open the door"],
+            "the text",
+            30,
+            lambda: (
+                f"texts {texts}; the driver said:\n{driver.stderr}\nthe node said:\n{processes.last_lines('node', 40)}"
+            ),
+        )
     finally:
         subscriber.unregister()
         processes.stop_all()

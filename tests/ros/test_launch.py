@@ -15,7 +15,7 @@ import soundfile
 from fixtures.audio import speak_tones
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from tests.ros.conftest import ROOT, ros_environment, serves, wait_for
+from tests.ros.conftest import ROOT, ros_environment, serves, spoken, wait_for
 from tests.ros.text_listener import received, write_listener
 
 LAUNCH = ROOT / "launch"
@@ -137,7 +137,9 @@ def test_the_driver_launch_runs_driver_node_and_window_with_one_command(display:
         processes.start("roslaunch", _roslaunch(port, "speech_event_launch_driver.launch", *launch_arguments))
         master = rosgraph.Master("/launchTest", master_uri=environment["ROS_MASTER_URI"])
         wait_for(
-            lambda: [t for _, t in received(processes.log("listener"))] == ["open the door"], "the text", 90
+            lambda: spoken([t for _, t in received(processes.log("listener"))]) == ["open the door"],
+            "the text",
+            90,
         )
         _, subscribers, _ = master.getSystemState()
         assert [TEXT_TOPIC, ["/listener", "/speechEventGui"]] in [[t, sorted(n)] for t, n in subscribers]
