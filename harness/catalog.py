@@ -3,12 +3,15 @@
 import dataclasses
 import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 
 from fixtures.audio import speak_tones
 from fixtures.tts import speak_tts
+from speech_event.asr.manifest import CONFORMER_TRANSDUCER, PARAKEET
+from speech_event.asr.whisper_manifest import WHISPER
 from speech_event.config import PATH_KEYS, SpeechEventConfig
 from speech_event.engines import EngineBuilder
 from speech_event.ports import Recognizer
@@ -40,40 +43,54 @@ VOICES: Dict[str, Voice] = {
     "tts": Voice(speak_tts, "[A-Za-z0-9',.?! -]"),
 }
 
+
+def _tones_model() -> Path:
+    from fixtures.tones_model import tones_model_directory
+
+    return tones_model_directory()
+
+
+def _tones_tdt_model() -> Path:
+    from fixtures.tones_model import tones_tdt_model_directory
+
+    return tones_tdt_model_directory()
+
+
+def _whisper_tones_model() -> Path:
+    from fixtures.whisper_tones_model import whisper_tones_model_directory
+
+    return whisper_tones_model_directory()
+
+
+@dataclass(frozen=True)
+class FixtureModel:
+    """A model built at test time that the node loads as a real model directory of its family."""
+
+    engine: str  # the node's engine that loads it
+    family: str  # the configuration's ``model``
+    build: Callable[[], Path]  # its directory (built once per process; the fixtures import onnx)
+
+
 FIXTURE_MODEL = "fixture-model"
 FIXTURE_PARAKEET = "fixture-parakeet"
 FIXTURE_WHISPER = "fixture-whisper"
-# The node's engines, plus the tones models built at test time: the conformer-transducer's RNN-T
-# and the parakeet family's TDT format (fixtures/tones_model.py), and a Whisper model
-# (fixtures/whisper_tones_model.py).
-RECOGNIZERS = (*ENGINES, FIXTURE_MODEL, FIXTURE_PARAKEET, FIXTURE_WHISPER)
+# The tones models: the conformer-transducer's RNN-T and the parakeet family's TDT format
+# (fixtures/tones_model.py), and a Whisper model (fixtures/whisper_tones_model.py).
+FIXTURE_MODELS: Dict[str, FixtureModel] = {
+    FIXTURE_MODEL: FixtureModel("nemo", CONFORMER_TRANSDUCER, _tones_model),
+    FIXTURE_PARAKEET: FixtureModel("nemo", PARAKEET, _tones_tdt_model),
+    FIXTURE_WHISPER: FixtureModel("whisper", WHISPER, _whisper_tones_model),
+}
+RECOGNIZERS = (*ENGINES, *FIXTURE_MODELS)
 # A model path written so in a scenario's [config] is a model built at test time.
 FIXTURE_PREFIX = "fixture:"
 FIXTURE_TONES = "fixture:tones"
 
 
-def _tones_model() -> str:
-    from fixtures.tones_model import tones_model_directory
-
-    return str(tones_model_directory())
-
-
-def _tones_tdt_model() -> str:
-    from fixtures.tones_model import tones_tdt_model_directory
-
-    return str(tones_tdt_model_directory())
-
-
-def _whisper_tones_model() -> str:
-    from fixtures.whisper_tones_model import whisper_tones_model_directory
-
-    return str(whisper_tones_model_directory())
-
-
 def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
     """``fixture:tones`` model paths made the directory of the tones transducer."""
     built: Dict[str, Any] = {
-        key: _tones_model() for key in PATH_KEYS if getattr(config, key) == FIXTURE_TONES
+        key: str(_tones_model()) for key in PATH_KEYS if getattr(config, key) == FIXTURE_TONES
     }
     return dataclasses.replace(config, **built) if built else config
 
@@ -81,22 +98,17 @@ def _fixture_paths(config: SpeechEventConfig) -> SpeechEventConfig:
 def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventConfig]:
     """The node's engine name and configuration for a scenario's recognizer.
 
-    A fixture model is a real model directory: the node loads it as its NeMo model of both
-    languages (as the fake serves both), of its family, in memory and on ROS alike.
+    A fixture model is a real model directory: the node loads it as its model of both languages
+    (as the fake serves both), of its family, in memory and on ROS alike.
     """
     config = _fixture_paths(config)
-    if name == FIXTURE_MODEL:
-        tones = _tones_model()
-        return "nemo", dataclasses.replace(config, en_model_path=tones, rw_model_path=tones)
-    if name == FIXTURE_PARAKEET:
-        tdt = _tones_tdt_model()
-        return "nemo", dataclasses.replace(config, model="parakeet", en_model_path=tdt, rw_model_path=tdt)
-    if name == FIXTURE_WHISPER:
-        whisper = _whisper_tones_model()
-        return "whisper", dataclasses.replace(
-            config, model="whisper", en_model_path=whisper, rw_model_path=whisper
-        )
-    return name, config
+    fixture = FIXTURE_MODELS.get(name)
+    if fixture is None:
+        return name, config
+    directory = str(fixture.build())
+    return fixture.engine, dataclasses.replace(
+        config, model=fixture.family, en_model_path=directory, rw_model_path=directory
+    )
 
 
 def recognizer_for(name: str, config: SpeechEventConfig) -> Recognizer:
