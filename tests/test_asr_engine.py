@@ -2,8 +2,6 @@
 model errors, and the whole engine against onnx-asr on models built at test time."""
 
 import logging
-import threading
-import time
 from pathlib import Path
 from typing import List, Tuple
 
@@ -24,6 +22,7 @@ from speech_event.asr.onnx_session import providers
 from speech_event.asr.rnnt_greedy import rnnt_greedy
 from speech_event.asr.vocabulary import Vocabulary, load_vocabulary
 from speech_event.resample import resample
+from tests.cancelling import failures_of_a_cancelled_transcription
 
 
 def _kaldi_native_fbank(audio: np.ndarray) -> np.ndarray:
@@ -177,20 +176,7 @@ def test_cuda_without_a_cuda_onnxruntime_warns_and_runs_on_the_cpu(
 def test_cancel_stops_a_running_transcription_and_the_next_one_runs(random_model: Path) -> None:
     engine = NemoRecognizer(random_model)
     long_audio = noise(16000 * 120, -20.0, np.random.default_rng(5))
-    failures: List[BaseException] = []
-
-    def transcribe() -> None:
-        try:
-            engine.transcribe(long_audio)
-        except Exception as problem:  # onnxruntime's own exception type
-            failures.append(problem)
-
-    worker = threading.Thread(target=transcribe)
-    worker.start()
-    while engine._run is None:  # the transcription has begun
-        time.sleep(0.001)
-    engine.cancel()
-    worker.join(30)
+    failures = failures_of_a_cancelled_transcription(engine, long_audio)
     assert len(failures) == 1
     assert "terminate" in str(failures[0]).lower()
     speech = resample(speak_tones("muraho", 48000), 48000, 16000)

@@ -25,6 +25,7 @@ from speech_event.config import SpeechEventConfig
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.resample import resample
 from tests.application import run_application
+from tests.cancelling import failures_of_a_cancelled_transcription
 
 RATE = 16000
 # A small vocabulary: 0-4 text, 5 eot, 6 sot, 7 en, 8 transcribe, 9 no_speech, 10 no timestamps,
@@ -133,6 +134,15 @@ def engine() -> WhisperRecognizer:
 
 def _speech(text: str) -> np.ndarray:
     return resample(speak_tones(text, 48000), 48000, RATE)
+
+
+def test_cancel_stops_a_running_transcription_and_the_next_one_runs(engine: WhisperRecognizer) -> None:
+    failures = failures_of_a_cancelled_transcription(
+        engine, noise(120 * RATE, -20.0, np.random.default_rng(5))
+    )
+    assert len(failures) == 1
+    assert "terminate" in str(failures[0]).lower()
+    assert engine.transcribe(_speech("stop")).text == "stop"  # the cancel was for that run only
 
 
 def test_the_tones_model_transcribes_and_reports_1_minus_no_speech_prob(engine: WhisperRecognizer) -> None:

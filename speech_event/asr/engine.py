@@ -19,6 +19,7 @@ from speech_event.asr.features import features
 from speech_event.asr.hypothesis import Hypothesis
 from speech_event.asr.manifest import CTC, MANIFEST_FILE, TDT, Manifest, load_manifest
 from speech_event.asr.model import CtcModel, TransducerModel
+from speech_event.asr.onnx_session import StoppableRuns
 from speech_event.asr.rnnt_greedy import rnnt_greedy
 from speech_event.asr.tdt_greedy import tdt_greedy
 from speech_event.asr.vocabulary import Vocabulary, load_vocabulary
@@ -46,7 +47,7 @@ class NemoRecognizer:
             CtcModel(directory, cuda) if self._manifest.decoding == CTC else TransducerModel(directory, cuda)
         )
         _check_logits(directory, self._model.logits_size, self._vocabulary, self._manifest)
-        self._run: Optional[onnxruntime.RunOptions] = None  # the options of the transcribe running now
+        self._runs = StoppableRuns()
 
     @property
     def sample_rate(self) -> int:
@@ -66,16 +67,13 @@ class NemoRecognizer:
         return rnnt_greedy(frames, step, state, blank, manifest.max_symbols_per_step)
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
-        run = onnxruntime.RunOptions()
-        self._run = run
+        run = self._runs.start()
         found = self.hypothesis(audio, run)
         return Transcript(self._vocabulary.text(found.tokens), found.confidence)
 
     def cancel(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""
-        run = self._run
-        if run is not None:
-            run.terminate = True
+        self._runs.stop()
 
 
 def _check_logits(directory: Path, size: Optional[int], vocabulary: Vocabulary, manifest: Manifest) -> None:

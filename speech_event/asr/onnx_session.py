@@ -42,6 +42,24 @@ def last_dimension(session: onnxruntime.InferenceSession, output: str) -> Option
     return size if isinstance(size, int) else None
 
 
+class StoppableRuns:
+    """The RunOptions of the transcription running now, so that another thread can stop it
+    (the node's recognition_timeout and speculative recognition do): its next session run raises."""
+
+    def __init__(self) -> None:
+        self._current: Optional[onnxruntime.RunOptions] = None
+
+    def start(self) -> onnxruntime.RunOptions:
+        run = onnxruntime.RunOptions()
+        self._current = run
+        return run
+
+    def stop(self) -> None:
+        run = self._current
+        if run is not None:
+            run.terminate = True
+
+
 def _describe(expected: Dict[str, int]) -> str:
     return ", ".join(f"{name} ({rank}-D)" if rank > 0 else name for name, rank in expected.items())
 

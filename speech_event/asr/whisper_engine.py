@@ -15,6 +15,7 @@ import onnxruntime
 
 from speech_event.asr.directory import exported_directory
 from speech_event.asr.errors import ModelError
+from speech_event.asr.onnx_session import StoppableRuns
 from speech_event.asr.whisper_features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
 from speech_event.asr.whisper_greedy import WhisperResult, whisper_greedy
 from speech_event.asr.whisper_manifest import (
@@ -68,7 +69,7 @@ class WhisperRecognizer:
                 f"{self._manifest.vocabulary_size}, the decoder gives {self._model.vocabulary_size} logits: "
                 "the files are not of one export"
             )
-        self._run: Optional[onnxruntime.RunOptions] = None
+        self._runs = StoppableRuns()
 
     @property
     def sample_rate(self) -> int:
@@ -80,8 +81,7 @@ class WhisperRecognizer:
         return whisper_greedy(DecoderSession(self._model, cross, run), self._prompt, self._manifest)
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
-        run = onnxruntime.RunOptions()
-        self._run = run
+        run = self._runs.start()
         results = [self.decode(piece, run) for piece in pieces_at_quiet_points(np.asarray(audio, np.float32))]
         texts = [
             text_of(result.tokens, self._pieces, self._manifest.timestamp_begin).strip() for result in results
@@ -93,6 +93,4 @@ class WhisperRecognizer:
 
     def cancel(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""
-        run = self._run
-        if run is not None:
-            run.terminate = True
+        self._runs.stop()
