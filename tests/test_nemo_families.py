@@ -3,7 +3,7 @@ directory's checks, and the family the robot's ``model`` key asks for."""
 
 import json
 from pathlib import Path
-from typing import Any, Dict, List, Tuple
+from typing import Any, Callable, Dict, List, Tuple
 
 import numpy as np
 import onnx_asr
@@ -12,6 +12,7 @@ import pytest
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import tones_model_directory, tones_tdt_model_directory
 from fixtures.transducer_model import build_random_ctc, build_random_transducer
+from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.asr.ctc_greedy import ctc_greedy
 from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.errors import ModelError
@@ -178,12 +179,14 @@ def test_a_ctc_directory_without_its_model_file_says_what_a_directory_holds(tmp_
     [
         ("parakeet", tones_model_directory, "conformer-transducer"),
         ("conformer-transducer", tones_tdt_model_directory, "parakeet"),
+        ("parakeet", whisper_tones_model_directory, "whisper"),
+        ("whisper", tones_tdt_model_directory, "parakeet"),
     ],
 )
 def test_a_directory_of_another_family_than_model_names_is_one_clear_error(
-    model: str, directory: object, family: str
+    model: str, directory: Callable[[], Path], family: str
 ) -> None:
-    path = directory()  # type: ignore[operator]
+    path = directory()
     config = SpeechEventConfig(language="english", model=model, en_model_path=str(path))
     with pytest.raises(ModelError) as error:
         RECOGNIZERS["auto"](config)
