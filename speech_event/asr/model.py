@@ -51,6 +51,14 @@ def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected
     check_tensors(path, kind, found, expected, "a NeMo export")
 
 
+def _audio_inputs(features: np.ndarray) -> Dict[str, np.ndarray]:
+    """The encoder's (or CTC model's) inputs for one utterance's features [features, T]."""
+    return {
+        "audio_signal": features[None].astype(np.float32),
+        "length": np.array([features.shape[1]], np.int64),
+    }
+
+
 class TransducerModel:
     def __init__(self, directory: Path, cuda: bool) -> None:
         encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_JOINT_FILE
@@ -73,10 +81,7 @@ class TransducerModel:
         """[features, T] -> encoder frames [T', D]. ``run.terminate`` stops it (it raises)."""
         outputs, lengths = self._encoder.run(
             ["outputs", "encoded_lengths"],
-            {
-                "audio_signal": features[None].astype(np.float32),
-                "length": np.array([features.shape[1]], np.int64),
-            },
+            _audio_inputs(features),
             run,
         )
         return np.asarray(outputs[0, :, : int(lengths[0])].T)
@@ -121,10 +126,7 @@ class CtcModel:
         """[features, T] -> per-frame log-probabilities [T', V + 1]."""
         (logprobs,) = self._model.run(
             ["logprobs"],
-            {
-                "audio_signal": features[None].astype(np.float32),
-                "length": np.array([features.shape[1]], np.int64),
-            },
+            _audio_inputs(features),
             run,
         )
         return np.asarray(logprobs[0])
