@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from speech_event.asr.errors import ModelError
+from speech_event.asr.manifest import MANIFEST_FILE as MANIFEST_FILE  # family_of reads every family's
 
-MANIFEST_FILE = "config.json"
 TOKENS_FILE = "tokens.txt"
 WHISPER = "whisper"
 
