@@ -73,7 +73,7 @@ def manifest_for(
     if tdt and not durations:
         raise ModelError("a TDT model whose config has no decoding.durations: cannot tell its durations")
     fast_conformer = encoder.get("subsampling") == "dw_striding"
-    detected = CONFORMER_TRANSDUCER if not (hybrid or ctc or tdt or fast_conformer) else PARAKEET
+    detected = PARAKEET if hybrid or ctc or tdt or fast_conformer else CONFORMER_TRANSDUCER
     greedy = decoding.get("greedy") or {}
     return Manifest(
         feature_settings(config["preprocessor"]),
