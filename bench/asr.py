@@ -35,7 +35,9 @@ from speech_event.asr.manifest import family_of
 from speech_event.asr.whisper_engine import WhisperRecognizer
 from speech_event.asr.whisper_features import whisper_log_mel
 from speech_event.asr.whisper_model import DecoderSession
+from speech_event.config import SpeechEventConfig
 from speech_event.ports import Recognizer
+from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.resample import resample
 
@@ -168,9 +170,11 @@ class _Said(logging.Handler):
 
 
 def _family_engine(directory: Path, cuda: bool) -> Recognizer:
-    if family_of(directory) == "whisper":
-        return WhisperRecognizer(directory, "english", cuda)
-    return NemoRecognizer(directory, cuda)
+    """The engine the node would build for this directory, as its family's ``model``."""
+    config = SpeechEventConfig(
+        language="english", model=family_of(directory), en_model_path=str(directory), cuda=cuda
+    )
+    return RECOGNIZERS["auto"](config)
 
 
 def _whisper_costs(engine: WhisperRecognizer, audio: np.ndarray) -> str:
