@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 from typing import Callable, Dict, List
 
-from bench.nemo_parity import SENTENCES, _biased, _config, _tokenizer
+from bench.nemo_parity import SENTENCES, _biased, _config, _conformer_rnnt, _tokenizer
 from bench.whisper_parity import random_checkpoint
 from speech_event.asr.export_nemo import export_model
 from speech_event.asr.export_whisper import export as export_whisper
@@ -45,10 +45,7 @@ def _tokenizer_of(size: int, work: Path) -> Path:
 
 
 def conformer_large(out: Path, work: Path) -> None:
-    from nemo.collections.asr.models import EncDecRNNTBPEModel
-    from omegaconf import OmegaConf
-
-    model = EncDecRNNTBPEModel(cfg=OmegaConf.create(_config(_tokenizer(work), fast=False)))
+    model = _conformer_rnnt(_tokenizer(work))  # the parity bench's conformer-transducer large
     _biased(model)
     export_model(model, out)
 

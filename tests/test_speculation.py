@@ -7,7 +7,7 @@ too): once with speculative_recognition false, once true.
 
 import dataclasses
 from pathlib import Path
-from typing import List, Optional, Tuple
+from typing import List, Tuple
 
 import numpy as np
 import pytest
@@ -22,7 +22,7 @@ from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
-from speech_event.ports import Recognizer, Transcript
+from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.speculation import complete_answers, is_complete
 from tests.rig import Rig
@@ -80,9 +80,8 @@ def _published(
     config: SpeechEventConfig,
     timeline: List[Block],
     recognition_seconds: float,
-    recognizer: Optional[Recognizer] = None,
 ) -> List[Tuple[float, str]]:
-    rig = Rig(config, recognizer or AudioDigest(), job_seconds=recognition_seconds)
+    rig = Rig(config, AudioDigest(), job_seconds=recognition_seconds)
     assert isinstance(rig.executor, ClockExecutor)
     rng = np.random.default_rng(7)
     for gap, size in timeline:
@@ -99,8 +98,8 @@ def _published(
 def test_with_speculation_the_same_texts_are_published_each_no_later(
     timeline: List[Block], recognition_seconds: float
 ) -> None:
-    plain = _published(PLAIN, timeline, recognition_seconds, AudioDigest())
-    speculating = _published(SPECULATING, timeline, recognition_seconds, AudioDigest())
+    plain = _published(PLAIN, timeline, recognition_seconds)
+    speculating = _published(SPECULATING, timeline, recognition_seconds)
     assert [text for _, text in speculating] == [text for _, text in plain]
     assert all(fast <= slow + 1e-9 for (fast, _), (slow, _) in zip(speculating, plain))
 
