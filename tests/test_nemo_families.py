@@ -18,6 +18,7 @@ from speech_event.asr.engine import NemoRecognizer
 from speech_event.asr.errors import ModelError
 from speech_event.asr.hypothesis import log_softmax
 from speech_event.asr.tdt_greedy import tdt_greedy
+from speech_event.asr.whisper_engine import WhisperRecognizer
 from speech_event.config import SpeechEventConfig
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.resample import resample
@@ -196,14 +197,21 @@ def test_a_directory_of_another_family_than_model_names_is_one_clear_error(
     )
 
 
-def test_model_parakeet_loads_the_directories_of_both_languages() -> None:
-    path = str(tones_tdt_model_directory())
+@pytest.mark.parametrize(
+    ("model", "directory", "engine"),
+    [
+        ("parakeet", tones_tdt_model_directory, NemoRecognizer),
+        ("whisper", whisper_tones_model_directory, WhisperRecognizer),
+    ],
+)
+def test_auto_loads_the_directories_of_both_languages_with_the_engine_of_model(
+    model: str, directory: Callable[[], Path], engine: type
+) -> None:
+    path = str(directory())
     for language in ("english", "kinyarwanda"):
-        config = SpeechEventConfig(
-            language=language, model="parakeet", en_model_path=path, rw_model_path=path
-        )
+        config = SpeechEventConfig(language=language, model=model, en_model_path=path, rw_model_path=path)
         recognizer = RECOGNIZERS["auto"](config)
-        assert isinstance(recognizer, NemoRecognizer)
+        assert isinstance(recognizer, engine)
         assert recognizer.transcribe(resample(speak_tones("yego", 48000), 48000, 16000)).text == "yego"
 
 

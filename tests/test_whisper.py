@@ -20,8 +20,6 @@ from speech_event.asr.whisper_engine import WhisperRecognizer, pieces_at_quiet_p
 from speech_event.asr.whisper_features import whisper_log_mel
 from speech_event.asr.whisper_greedy import whisper_greedy
 from speech_event.asr.whisper_manifest import load_tokens, text_of, token_lines
-from speech_event.config import SpeechEventConfig
-from speech_event.recognizers import RECOGNIZERS
 from speech_event.resample import resample
 from tests.application import run_application
 from tests.cancelling import failures_of_a_cancelled_transcription
@@ -211,13 +209,6 @@ def test_a_checkpoint_given_directly_says_how_to_export_it(tmp_path: Path) -> No
         f"{tmp_path / 'base.pt'} is a .pt file, not an exported model directory: export it once with "
         f"'speech-event export-whisper {tmp_path / 'base.pt'} OUT_DIR' (needs the 'export' extra), then give OUT_DIR"
     )
-
-
-def test_model_whisper_serves_both_languages_through_auto() -> None:
-    path = str(whisper_tones_model_directory())
-    for language in ("english", "kinyarwanda"):
-        config = SpeechEventConfig(language=language, model="whisper", en_model_path=path, rw_model_path=path)
-        assert RECOGNIZERS["auto"](config).transcribe(_speech("yego")).text == "yego"
 
 
 def test_the_exporter_maps_languages_to_whisper_tokens() -> None:
