@@ -1,6 +1,6 @@
 """The length cut on real synthetic speech: it never falls inside a word.
 
-espeak-ng says where each word starts (fixtures/tts_words.py). 22 long utterances, each two
+espeak-ng says where each word starts (fixtures/tts.py). 22 long utterances, each two
 sentences joined with "and" (9 to 11 s), are assembled with an 8 s limit, so each is cut once
 (the search: the 2.4 s before the limit). A cut is between words when the 20 ms around it are
 silent (espeak-ng's pauses, under the tts voice's -55 dBFS noise) or it is within 30 ms of a
@@ -13,7 +13,7 @@ from typing import List
 import numpy as np
 import pytest
 
-from fixtures.tts_words import speak_with_word_starts
+from fixtures.tts import speak_with_word_starts
 from speech_event.assembly import UtteranceAssembler
 
 RATE = 48000
