@@ -10,6 +10,13 @@ from pathlib import Path
 from speech_event.msg import RecogniseSpeechAction
 from speech_event.srv import SetEnabled, SetLanguage
 from tests.ros.conftest import ROOT
+from tests.ros.debian_packages import not_installed_by_the_project
+
+
+def _configuration_files(cache: Path) -> "list[str]":
+    """Every file in the folders where cmake found the packages it was asked for (``NAME_DIR``)."""
+    found = re.findall(r"^\w+_DIR:PATH=(/usr/\S+)$", cache.read_text(), re.MULTILINE)
+    return [str(path) for folder in sorted(set(found)) for path in sorted(Path(folder).glob("*.cmake"))]
 
 
 def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tmp_path: Path) -> None:
@@ -24,6 +31,11 @@ def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tm
         timeout=600,
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    # what cmake read of Debian's ROS (catkin, message_generation, std_msgs, ...) is installed by
+    # the project's own install step, not by hand
+    configuration = _configuration_files(tmp_path / "build" / "CMakeCache.txt")
+    assert len(configuration) > 10
+    assert not_installed_by_the_project(configuration) == {}
     install = tmp_path / "install"
     for script in ("speech_event_application.py", "sound_detection_replay.py", "speech_event_checker.py"):
         installed = install / "lib" / "speech_event" / script
