@@ -17,6 +17,9 @@ else:
                 "harness",
                 "fixtures",
             ],
-            package_data={"harness": ["data/*.txt"]},
+            package_data={
+                "harness": ["data/*.txt"],
+                "speech_event": ["definitions/srv/*.srv", "definitions/action/*.action"],
+            },
         )
     )

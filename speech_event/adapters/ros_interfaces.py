@@ -1,28 +1,35 @@
 """Builds the Python classes of the node's ROS interfaces (srv/, action/) with Debian's genpy.
 
-On the robot catkin builds them (CMakeLists.txt: add_service_files, add_action_files); for
-development and CI this is the build step, no catkin workspace needed:
-``speech-event build-ros-interfaces`` writes ``speech_event/msg`` and ``speech_event/srv`` next to
-the code, where catkin's install puts them too. The ROS adapter runs it on import when they are
-missing or older than their definitions. Actions go through actionlib_msgs' own genaction.py
-(Debian's libactionlib-msgs-dev) into the seven messages of an action, as catkin does.
+The definitions ship inside the package (``speech_event/definitions/{srv,action}``), so a wheel
+or sdist install has them too. On the robot catkin builds them (CMakeLists.txt: add_service_files,
+add_action_files); elsewhere this is the build step, no catkin workspace needed:
+``python -m speech_event.adapters.ros_interfaces`` writes ``speech_event/msg`` and
+``speech_event/srv`` next to the code, where catkin's install puts them too. The ROS adapter runs
+it on import when they are missing or older than their definitions. Where the package's folder
+cannot be written (a system-wide install run by another user) they are built under
+``$XDG_CACHE_HOME/speech_event/ros_interfaces/<digest of the definitions>`` and found there through
+the package's ``__path__``. Actions go through actionlib_msgs' own genaction.py (Debian's
+libactionlib-msgs-dev) into the seven messages of an action, as catkin does.
 
 ``generate`` also builds any other package's definitions: the tests build the robot's own client
 types (other names, same fields) this way and call the node through them.
 """
 
 import fcntl
+import hashlib
+import os
 import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Optional
+
+import speech_event
 
 PACKAGE = "speech_event"
-ROOT = Path(__file__).resolve().parents[2]
-DEFINITIONS = ROOT  # srv/ and action/ live at the package root, as catkin wants them
-OUTPUT = Path(__file__).resolve().parents[1]  # speech_event/: its msg/ and srv/ subpackages
+PACKAGE_DIRECTORY = Path(__file__).resolve().parents[1]  # speech_event/: its msg/ and srv/ subpackages
+DEFINITIONS = PACKAGE_DIRECTORY / "definitions"  # srv/ and action/, named in CMakeLists.txt too
 GENACTION = Path("/usr/lib/actionlib_msgs/genaction.py")
 DEPENDENCIES = ("std_msgs", "actionlib_msgs")
 
@@ -31,7 +38,8 @@ class InterfaceError(Exception):
     """The interfaces cannot be built; the message says what is missing."""
 
 
-def _message_directory(package: str) -> str:
+def message_directory(package: str) -> str:
+    """The folder of a ROS package's .msg files (a Debian ros-* package's), or InterfaceError."""
     import rospkg
 
     try:
@@ -65,7 +73,7 @@ def generate(package: str, definitions: Path, out: Path) -> None:
         for action in sorted((definitions / "action").glob("*.action")):
             _action_messages(action, messages)
         search: Dict[str, List[str]] = {package: [str(messages)]}
-        search.update({dependency: [_message_directory(dependency)] for dependency in DEPENDENCIES})
+        search.update({dependency: [message_directory(dependency)] for dependency in DEPENDENCIES})
         built = Path(work) / "built"
         for kind, generator, files in (
             ("msg", MsgGenerator(), sorted(messages.glob("*.msg"))),
@@ -87,31 +95,48 @@ def _definitions() -> List[Path]:
     return sorted([*(DEFINITIONS / "srv").glob("*.srv"), *(DEFINITIONS / "action").glob("*.action")])
 
 
-def _up_to_date() -> bool:
-    built = [OUTPUT / "msg" / "__init__.py", OUTPUT / "srv" / "__init__.py"]
+def output_directory(writable: bool) -> Path:
+    """Where the classes go: the package's own folder, or (not ``writable``) a cache of the user's."""
+    if writable:
+        return PACKAGE_DIRECTORY
+    digest = hashlib.sha1(b"".join(path.read_bytes() for path in _definitions())).hexdigest()[:16]
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return cache / "speech_event" / "ros_interfaces" / digest
+
+
+def _up_to_date(out: Path) -> bool:
+    built = [out / "msg" / "__init__.py", out / "srv" / "__init__.py"]
     if not all(path.is_file() for path in built):
         return False
     newest = max((path.stat().st_mtime for path in _definitions()), default=0.0)
     return min(path.stat().st_mtime for path in built) >= newest
 
 
-def ensure_built() -> None:
-    """Build the node's interfaces unless catkin or an earlier run did (one process at a time)."""
-    if _up_to_date() or not _definitions():  # an install without the definitions has catkin's
-        return
-    with open(OUTPUT / ".ros_interfaces.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not _up_to_date():
-            generate(PACKAGE, DEFINITIONS, OUTPUT)
+def ensure_built(writable: Optional[bool] = None) -> Path:
+    """Build the node's interfaces unless catkin or an earlier run did (one process at a time).
+
+    ``writable`` (default: whether the package's folder is) chooses output_directory; outside the
+    package, the folder joins the package's ``__path__`` so ``speech_event.msg`` imports from it."""
+    out = output_directory(os.access(PACKAGE_DIRECTORY, os.W_OK) if writable is None else writable)
+    if out != PACKAGE_DIRECTORY:
+        out.mkdir(parents=True, exist_ok=True)
+        if str(out) not in speech_event.__path__:
+            speech_event.__path__.insert(0, str(out))
+    if not _up_to_date(out):
+        with open(out / ".ros_interfaces.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not _up_to_date(out):
+                generate(PACKAGE, DEFINITIONS, out)
+    return out
 
 
 def main() -> int:
     try:
-        generate(PACKAGE, DEFINITIONS, OUTPUT)
+        generate(PACKAGE, DEFINITIONS, PACKAGE_DIRECTORY)
     except (InterfaceError, ImportError, subprocess.CalledProcessError) as problem:
         print(f"error: cannot build the ROS interfaces: {problem}", file=sys.stderr)
         return 2
-    print(f"built {OUTPUT / 'msg'} and {OUTPUT / 'srv'}")
+    print(f"built {PACKAGE_DIRECTORY / 'msg'} and {PACKAGE_DIRECTORY / 'srv'}")
     return 0
 
 
