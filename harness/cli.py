@@ -69,16 +69,23 @@ def _run(arguments: argparse.Namespace) -> int:
             "test is ours, on a fake clock"
         )
     base = _base_config(arguments.config)
-    scenarios = [load_scenario(path, base) for path in arguments.files]
     hint = SIM_TIME_HINT if arguments.transport == "ros" and not arguments.real_time else None
     failures = 0
     with ExitStack() as stack:
         play = _replays(arguments, stack)
-        for scenario in scenarios:
-            outcome = play(scenario)
+        for path in arguments.files:
+            # One scenario that cannot be loaded or run (a bad file, a model or VAD not installed)
+            # is named and counted as failed; the others still run.
+            try:
+                scenario = load_scenario(path, base)
+                outcome = play(scenario)
+            except (ConfigError, ScenarioError, ModelError) as problem:
+                print(f"FAIL  {Path(path).stem}  ({path})\n      cannot run: {problem}", flush=True)
+                failures += 1
+                continue
             print(report(scenario, outcome, hint), flush=True)
             failures += not passed(scenario, outcome)
-    print(f"{len(scenarios) - failures} passed, {failures} failed")
+    print(f"{len(arguments.files) - failures} passed, {failures} failed")
     return 1 if failures else 0
 
 
