@@ -2,6 +2,13 @@
 # soundDetection stand-in that replays a scenario file (see harness/ros_sound_detection.py).
 import sys
 
-from harness.ros_sound_detection import main
+try:
+    from harness.ros_sound_detection import main
+except ModuleNotFoundError as missing:  # this Python lacks Speech Event or what it needs
+    print(
+        f"error: {sys.executable} cannot import {missing.name}: see README.md, 'On ROS and on the robot'",
+        file=sys.stderr,
+    )
+    sys.exit(2)
 
 sys.exit(main())

@@ -98,3 +98,20 @@ def test_values_that_do_not_work_together_are_refused(text: str, message: str) -
     with pytest.raises(ConfigError) as error:
         parse_config(text, "f.ini")
     assert str(error.value) == message
+
+
+@pytest.mark.parametrize("script", sorted(path.name for path in (ROOT / "scripts").glob("*.py")))
+def test_a_script_run_by_a_python_without_the_project_says_so_in_one_line(
+    script: str, tmp_path: Path
+) -> None:
+    # As a new user ran scripts/speech_event_driver.py with /usr/bin/python3 (issue 17, item 4):
+    # -I -S is a Python that sees neither the checkout nor any site-packages.
+    result = _elsewhere(tmp_path, sys.executable, "-I", "-S", str(ROOT / "scripts" / script))
+    assert result.returncode == 2
+    assert result.stdout == ""
+    missing = (
+        "harness" if script not in ("speech_event_application.py", "speech_event_gui.py") else "speech_event"
+    )
+    assert result.stderr == (
+        f"error: {sys.executable} cannot import {missing}: see README.md, 'On ROS and on the robot'\n"
+    )
