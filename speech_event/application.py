@@ -30,6 +30,7 @@ ROS_MODULES = {
     "genpy",
 }
 SHUTDOWN_GRACE_SECONDS = 2.0
+INTERRUPTED = 130  # the shell's status for a process ended by SIGINT
 ROS_NEEDED = (
     "error: the node needs ROS 1 (rospy, actionlib, diagnostic_msgs), which this Python cannot import "
     "({problem}); see README.md, 'On ROS and on the robot'"
@@ -78,10 +79,12 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
         announce_start,
         signals_held,
         start_ros_node,
+        wait_for_master,
         wait_for_shutdown,
     )
     from speech_event.node import SpeechEventNode
 
+    wait_for_master(lambda line: print(line, file=sys.stderr, flush=True))
     start_ros_node(NODE_NAME, verbose=config.verbose_mode)
     executor = ThreadExecutor()
     with signals_held():  # a Ctrl-C during registration would deadlock rospy: it comes after
@@ -127,6 +130,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 2
     try:
         run(config, recognizer, arguments.recognizer, screen)
+    except KeyboardInterrupt:  # before the node registered: waiting for the master
+        print("interrupted before the ROS master answered", file=sys.stderr)
+        return INTERRUPTED
     except ImportError as problem:  # no ROS 1 here: one line, not rospy's traceback
         if problem.name is None or problem.name.split(".")[0] not in ROS_MODULES:
             raise

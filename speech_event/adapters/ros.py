@@ -19,6 +19,7 @@ import os
 import queue
 import signal
 import threading
+import time
 import xmlrpc.client
 from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
@@ -367,6 +368,29 @@ def call_service(name: str, service: messages.ServiceType, request: object) -> o
     rospy.wait_for_service(name, timeout=SERVICE_TIMEOUT)
     answer = rospy.ServiceProxy(name, ros_service)(_as_ros(ros_service._request_class, request))
     return _from_ros(service.response, answer)
+
+
+def master_answers(timeout: float = MASTER_TIMEOUT) -> bool:
+    """Whether the ROS master of ROS_MASTER_URI answers within ``timeout``."""
+    master = xmlrpc.client.ServerProxy(rosgraph.get_master_uri(), transport=_TimeoutTransport(timeout))
+    try:
+        master.getPid("/speechEvent")
+    except (OSError, xmlrpc.client.Error):
+        return False
+    return True
+
+
+def wait_for_master(say: Callable[[str], None], poll_seconds: float = 0.5) -> None:
+    """Return once the master answers, having said once (through ``say``) that the node waits for it.
+
+    rospy.init_node would wait too, but silently behind a repeated "Unable to register with
+    master", and a Ctrl-C there ends in a traceback; here it is a KeyboardInterrupt the caller
+    ends cleanly."""
+    if master_answers():
+        return
+    say(f"waiting for the ROS master at {rosgraph.get_master_uri()} (ROS_MASTER_URI); Ctrl-C stops")
+    while not master_answers():
+        time.sleep(poll_seconds)
 
 
 def start_ros_node(name: str, verbose: bool) -> None:

@@ -18,11 +18,11 @@ from std_msgs import msg as std_msgs
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
-from harness.ros_runner import Processes
+from harness.ros_runner import Processes, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
 from tests.application import APPLICATION
-from tests.ros.conftest import ROOT, spoken, wait_for
+from tests.ros.conftest import ROOT, ros_environment, spoken, wait_for
 
 
 def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:
@@ -115,3 +115,28 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
     finally:
         subscriber.unregister()
         processes.stop_all()
+
+
+def test_without_a_master_the_node_says_once_that_it_waits_and_ctrl_c_ends_it_in_one_line(
+    tmp_path: Path,
+) -> None:
+    port = free_port()  # nothing listens there
+    environment = ros_environment(port, tmp_path)
+    processes = Processes(environment, tmp_path)
+    node = processes.start("node", [sys.executable, str(APPLICATION), "--recognizer", "fake"])
+    waiting = f"waiting for the ROS master at http://127.0.0.1:{port} (ROS_MASTER_URI); Ctrl-C stops"
+    try:
+        wait_for(
+            lambda: waiting in processes.log("node").read_text(),
+            "the waiting line",
+            seen=lambda: processes.last_lines("node"),
+        )
+        time.sleep(2.0)  # four more polls of the master: still said once
+        os.killpg(node.pid, signal.SIGINT)
+        assert node.wait(10) == 130
+    finally:
+        processes.stop_all()
+    assert processes.log("node").read_text().splitlines() == [
+        waiting,
+        "interrupted before the ROS master answered",
+    ]
