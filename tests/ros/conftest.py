@@ -86,17 +86,20 @@ def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]
 # loses the whole process when that server stops.
 @pytest.fixture(scope="session")
 def display() -> Iterator[str]:
-    number = next(n for n in range(90, 200) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    # -displayfd: Xvfb takes the first free display and writes its number, so test processes side
+    # by side (pytest-xdist workers) never race for one.
+    read, write = os.pipe()
     server = subprocess.Popen(
-        ["Xvfb", f":{number}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        pass_fds=(write,),
     )
+    os.close(write)
     try:
-        deadline = time.monotonic() + 20
-        while not Path(f"/tmp/.X11-unix/X{number}").exists():
-            assert server.poll() is None and time.monotonic() < deadline, "Xvfb did not start"
-            time.sleep(0.05)
+        with os.fdopen(read) as announced:
+            number = announced.readline().strip()
+        assert number.isdigit() and server.poll() is None, "Xvfb did not start"
         old = os.environ.get("DISPLAY")
         os.environ["DISPLAY"] = f":{number}"
         yield f":{number}"
