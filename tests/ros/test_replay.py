@@ -13,7 +13,11 @@ import rosgraph
 
 from harness.ros_runner import descendants, route_address
 from tests.ros.conftest import ROOT, ros_environment
-from tests.scenario_files import SCENARIOS, TONES_SCENARIOS
+from tests.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
+
+# Real time replays every scenario on the wall clock (about 500 s in all): in parts, side by side.
+REAL_TIME_SHARDS = 8
+SIM_TIME_SHARDS = 3
 
 
 def _harness(environment: Dict[str, str], *arguments: str) -> "subprocess.CompletedProcess[str]":
@@ -33,29 +37,33 @@ def _own_roscore_environment(tmp_path: Path) -> Dict[str, str]:
     return environment
 
 
-def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: Path) -> None:
+@pytest.mark.parametrize("part", range(SIM_TIME_SHARDS))
+def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: Path, part: int) -> None:
+    scenarios = shard(SCENARIOS, part, SIM_TIME_SHARDS)
     result = _harness(
-        _own_roscore_environment(tmp_path), *[str(path.relative_to(ROOT)) for path in SCENARIOS]
+        _own_roscore_environment(tmp_path), *[str(path.relative_to(ROOT)) for path in scenarios]
     )
     lines = result.stdout.splitlines()
-    assert lines[-1] == f"{len(SCENARIOS)} passed, 0 failed", result.stdout + result.stderr
-    assert [line.split("  ")[0] for line in lines[:-1]] == ["PASS"] * len(SCENARIOS)
+    assert lines[-1] == f"{len(scenarios)} passed, 0 failed", result.stdout + result.stderr
+    assert [line.split("  ")[0] for line in lines[:-1]] == ["PASS"] * len(scenarios)
     assert result.returncode == 0
 
 
+@pytest.mark.parametrize("part", range(SIM_TIME_SHARDS))
 @pytest.mark.parametrize("model", ["fixture-parakeet", "fixture-whisper"])
 def test_every_tones_scenario_passes_on_ros_with_the_other_families_fixture_models(
-    tmp_path: Path, model: str
+    tmp_path: Path, model: str, part: int
 ) -> None:
     """The TDT tones model and the Whisper tones model loaded by the node's process, as in memory."""
     copies = []
-    for path in TONES_SCENARIOS:
+    scenarios = shard(TONES_SCENARIOS, part, SIM_TIME_SHARDS)
+    for path in scenarios:
         copy = tmp_path / path.name
         copy.write_text(f'recognizer = "{model}"\n{path.read_text()}')
         copies.append(str(copy))
     result = _harness(_own_roscore_environment(tmp_path), *copies)
     lines = result.stdout.splitlines()
-    assert lines[-1] == f"{len(TONES_SCENARIOS)} passed, 0 failed", result.stdout + result.stderr
+    assert lines[-1] == f"{len(scenarios)} passed, 0 failed", result.stdout + result.stderr
     assert result.returncode == 0
 
 
@@ -87,13 +95,15 @@ def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) ->
     assert marker.read_text().endswith("speech_event_configuration.ini")
 
 
-def test_real_time_replay_passes_every_scenario_on_the_wall_clock(tmp_path: Path) -> None:
+@pytest.mark.parametrize("part", range(REAL_TIME_SHARDS))
+def test_real_time_replay_passes_every_scenario_on_the_wall_clock(tmp_path: Path, part: int) -> None:
+    scenarios = shard(SCENARIOS, part, REAL_TIME_SHARDS)
     result = _harness(
         _own_roscore_environment(tmp_path),
         "--real-time",
-        *[str(path.relative_to(ROOT)) for path in SCENARIOS],
+        *[str(path.relative_to(ROOT)) for path in scenarios],
     )
-    assert result.stdout.splitlines()[-1] == f"{len(SCENARIOS)} passed, 0 failed", (
+    assert result.stdout.splitlines()[-1] == f"{len(scenarios)} passed, 0 failed", (
         result.stdout + result.stderr
     )
 

@@ -21,6 +21,7 @@ from tests.application import APPLICATION
 from tests.ros.conftest import ROOT, ros_environment, wait_for
 from tests.ros.text_listener import assert_errors_on_time, received, write_listener
 from tests.ros.two_hosts import Host, TwoHosts, two_hosts
+from tests.scenario_files import shard
 
 MASTER_PORT = 11311  # the namespaces are the test's own: the standard port is free there
 PERIOD = 1.0
@@ -95,7 +96,11 @@ def _texts(log: Path) -> List[str]:
     return [text for _, text in received(log)]
 
 
-def test_every_tones_scenario_passes_with_the_node_on_another_host(hosts: TwoHosts, tmp_path: Path) -> None:
+@pytest.mark.parametrize("part", range(2))
+def test_every_tones_scenario_passes_with_the_node_on_another_host(
+    hosts: TwoHosts, tmp_path: Path, part: int
+) -> None:
+    scenarios = shard(TONES_SCENARIOS, part, 2)
     environment = _environment(hosts, tmp_path)
     processes = Processes(environment, tmp_path)
     try:
@@ -121,7 +126,7 @@ def test_every_tones_scenario_passes_with_the_node_on_another_host(hosts: TwoHos
                 node_command,
                 "--config-dir",
                 str(config_dir),
-                *[str(path.relative_to(ROOT)) for path in TONES_SCENARIOS],
+                *[str(path.relative_to(ROOT)) for path in scenarios],
             ),
             cwd=ROOT,
             env=environment,
@@ -130,7 +135,7 @@ def test_every_tones_scenario_passes_with_the_node_on_another_host(hosts: TwoHos
             timeout=1200,
         )
         lines = result.stdout.splitlines()
-        assert lines[-1:] == [f"{len(TONES_SCENARIOS)} passed, 0 failed"], result.stdout + result.stderr
+        assert lines[-1:] == [f"{len(scenarios)} passed, 0 failed"], result.stdout + result.stderr
         assert (config_dir / "speech_event_configuration.ini").exists()
     finally:
         processes.stop_all()
