@@ -64,6 +64,16 @@ def master_answers(uri: str) -> bool:
         return False
 
 
+def pytest_collection_modifyitems(items: List[pytest.Item]) -> None:
+    """Tests on the session's roscore share this process's rospy node, its topics and their
+    connections: in another order they disturb each other (a typed line lost, a feedback missed,
+    seen with pytest-xdist), so they all run in one worker, in the order of the files. Every
+    other test (the scenario replays, the two hosts) starts a roscore of its own and runs anywhere."""
+    for item in items:
+        if "roscore" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("this_process_rospy_node"))
+
+
 @pytest.fixture(scope="session")
 def roscore(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Dict[str, str]]:
     """A roscore of the test session's own on a free port; the test process is a ROS node on it."""
