@@ -327,6 +327,17 @@ class RosReplay:
             ]
         return self.processes.start("node", command)
 
+    def _wait_for_the_action_server(self) -> None:
+        """wait_for_server waits for the server's topics only: a goal sent before the node hears the
+        goal topic is lost, so this waits for that connection too."""
+        if not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
+            raise ReplayError(f"the node serves no action {ACTION_NAME}")
+        deadline = time.monotonic() + EVENT_TIMEOUT
+        while self._action_client.pub_goal.get_num_connections() == 0:
+            if time.monotonic() > deadline:
+                raise ReplayError(f"the node does not hear the goals of {ACTION_NAME}")
+            time.sleep(0.01)
+
     def _wait_for_node(self, node: "subprocess.Popen[str]") -> None:
         deadline = time.monotonic() + STARTUP_TIMEOUT
         while not self._node_ready():
@@ -396,8 +407,8 @@ class RosReplay:
         node = self._start_node(scenario)
         self._wait_for_node(node)
         sends_goals = any(isinstance(event, SendGoal) for event in timeline.events)
-        if sends_goals and not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
-            raise ReplayError(f"the node serves no action {ACTION_NAME}")
+        if sends_goals:
+            self._wait_for_the_action_server()
         stand_in = _StandIn(self.processes, scenario.source, self._options.base_config, self._node_uri())
         closing_times = _utterance_closing_times(scenario, timeline)
         events_at: Dict[float, List[Tuple[int, Event]]] = defaultdict(list)

@@ -107,6 +107,9 @@ def _action_client(robot_types: Tuple[ModuleType, ModuleType]) -> actionlib.Simp
     _, msg = robot_types
     client = actionlib.SimpleActionClient(ACTION, msg.recogniseSpeechAction)
     assert client.wait_for_server(rospy.Duration(30))
+    # wait_for_server waits for the server's topics, not for the server to hear the client's goal
+    # topic: a goal sent before that connection is up is lost (seen under load, 1 run in 5).
+    wait_for(lambda: client.action_client.pub_goal.get_num_connections() > 0, "the node to hear our goals")
     return client
 
 
