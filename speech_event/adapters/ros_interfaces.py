@@ -131,12 +131,14 @@ def ensure_built(writable: Optional[bool] = None) -> Path:
 
 
 def main() -> int:
+    out = output_directory(os.access(PACKAGE_DIRECTORY, os.W_OK))
     try:
-        generate(PACKAGE, DEFINITIONS, PACKAGE_DIRECTORY)
+        out.mkdir(parents=True, exist_ok=True)
+        generate(PACKAGE, DEFINITIONS, out)
     except (InterfaceError, ImportError, subprocess.CalledProcessError) as problem:
         print(f"error: cannot build the ROS interfaces: {problem}", file=sys.stderr)
         return 2
-    print(f"built {PACKAGE_DIRECTORY / 'msg'} and {PACKAGE_DIRECTORY / 'srv'}")
+    print(f"built {out / 'msg'} and {out / 'srv'}")
     return 0
 
 
