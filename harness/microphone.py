@@ -114,6 +114,11 @@ class Microphone:
         blocks: queue.Queue[np.ndarray] = queue.Queue(QUEUE_BLOCKS)
 
         def arrived(indata: np.ndarray, frames: int, time: Any, status: Any) -> None:
+            # Stopping: end the stream from its own callback. A device that delivers faster than
+            # the driver reads (the tests' file device) otherwise keeps PortAudio's thread calling
+            # in, and the driver took over 30 s to end after SIGINT (2 CI runs in 5).
+            if stop.is_set():
+                raise self._audio.CallbackStop
             try:
                 blocks.put_nowait(indata.copy())
             except queue.Full:

@@ -140,6 +140,10 @@ def test_a_missing_device_is_said_once_with_the_devices_and_capture_starts_when_
     ]  # the rest of stderr: after the missing-device line the reader thread took
 
 
+class _CallbackStop(Exception):
+    """sounddevice.CallbackStop: the callback ends its stream."""
+
+
 class _FakeStream:
     """A stream that delivers ``blocks`` on a thread, then stops as an unplugged device does."""
 
@@ -150,7 +154,10 @@ class _FakeStream:
     def __enter__(self) -> "_FakeStream":
         def deliver() -> None:
             for block in self._blocks:
-                self._callback(block, block.shape[0], None, None)
+                try:
+                    self._callback(block, block.shape[0], None, None)
+                except _CallbackStop:
+                    break
             self.active = False
 
         threading.Thread(target=deliver, daemon=True).start()
@@ -164,6 +171,7 @@ class _FakeSounddevice:
     """sounddevice as the Microphone uses it: one device at 44.1 kHz that comes and goes."""
 
     PortAudioError = RuntimeError
+    CallbackStop = _CallbackStop
 
     def __init__(self, sessions: List[List[np.ndarray]]) -> None:
         self.sessions = sessions  # the blocks of each time the device is opened
