@@ -133,7 +133,7 @@ def test_without_a_master_the_node_says_once_that_it_waits_and_ctrl_c_ends_it_in
         )
         time.sleep(2.0)  # four more polls of the master: still said once
         os.killpg(node.pid, signal.SIGINT)
-        assert node.wait(10) == 130
+        assert node.wait(30) == 130
     finally:
         processes.stop_all()
     assert processes.log("node").read_text().splitlines() == [
