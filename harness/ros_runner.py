@@ -39,7 +39,7 @@ from harness.outcome import Outcome, Published, result_text
 from harness.scenario import ReplayError, Scenario
 from harness.timeline import CallService, ComeUp, Event, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from speech_event.adapters.ros import generated_class
+from speech_event.adapters.ros import generated_class, master_answers
 from speech_event.config import format_config
 from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.listen_action import ACTION_NAME
@@ -217,7 +217,9 @@ class RosReplay:
         )
         self._master = rosgraph.Master("/speechEventReplay", master_uri=environment["ROS_MASTER_URI"])
         _wait_until(
-            self._master_answers, "the ROS master at " + environment["ROS_MASTER_URI"], STARTUP_TIMEOUT
+            lambda: master_answers(environment["ROS_MASTER_URI"]),
+            "the ROS master at " + environment["ROS_MASTER_URI"],
+            STARTUP_TIMEOUT,
         )
         rospy.set_param("/use_sim_time", not options.real_time)
         rospy.init_node("speechEventReplay", disable_signals=True)
@@ -230,13 +232,6 @@ class RosReplay:
         self._action_client = actionlib.ActionClient(ACTION_NAME, action)
         # A goal handle must be kept, or actionlib stops tracking its goal.
         self._goals: List[actionlib.ClientGoalHandle] = []
-
-    def _master_answers(self) -> bool:
-        try:
-            self._master.getPid()
-            return True
-        except Exception:
-            return False
 
     def _scenario_time(self) -> float:
         """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""

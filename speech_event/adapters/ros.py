@@ -370,9 +370,9 @@ def call_service(name: str, service: messages.ServiceType, request: object) -> o
     return _from_ros(service.response, answer)
 
 
-def master_answers(timeout: float = MASTER_TIMEOUT) -> bool:
-    """Whether the ROS master of ROS_MASTER_URI answers within ``timeout``."""
-    master = xmlrpc.client.ServerProxy(rosgraph.get_master_uri(), transport=_TimeoutTransport(timeout))
+def master_answers(uri: Optional[str] = None, timeout: float = MASTER_TIMEOUT) -> bool:
+    """Whether the ROS master at ``uri`` (default ROS_MASTER_URI's) answers within ``timeout``."""
+    master = xmlrpc.client.ServerProxy(uri or rosgraph.get_master_uri(), transport=_TimeoutTransport(timeout))
     try:
         master.getPid("/speechEvent")
     except (OSError, xmlrpc.client.Error):

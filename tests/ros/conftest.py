@@ -14,6 +14,7 @@ import rospy
 
 from harness.ros_runner import Processes, free_port
 from speech_event import SOUND_DETECTION_DOWN
+from speech_event.adapters.ros import master_answers
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -52,14 +53,6 @@ def serves(service: str, uri: Optional[str] = None) -> bool:
     """Whether the master (ROS_MASTER_URI's unless ``uri``) lists ``service``; no answer is no."""
     try:
         return bool(rosgraph.Master("/probe", master_uri=uri).lookupService(service))
-    except Exception:
-        return False
-
-
-def master_answers(uri: str) -> bool:
-    try:
-        rosgraph.Master("/probe", master_uri=uri).getPid()
-        return True
     except Exception:
         return False
 

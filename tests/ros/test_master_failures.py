@@ -17,8 +17,9 @@ from typing import Dict
 import rosgraph
 
 from harness.ros_runner import Processes, descendants, free_port
+from speech_event.adapters.ros import master_answers
 from tests.application import APPLICATION
-from tests.ros.conftest import master_answers, ros_environment, serves, wait_for
+from tests.ros.conftest import ros_environment, serves, wait_for
 from tests.ros.text_listener import assert_errors_on_time, received, write_listener
 
 FREEZE_SECONDS = 8.0
