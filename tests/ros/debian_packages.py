@@ -15,13 +15,14 @@ from typing import Dict, FrozenSet, Iterable, List
 LISTS = Path(__file__).resolve().parents[1] / "debian"
 
 
+def listed(path: Path) -> List[str]:
+    """The packages of one list file: a name a line, '#' comments."""
+    return [name for line in path.read_text().splitlines() for name in line.split("#")[0].split()[:1]]
+
+
 def named_packages() -> List[str]:
     """Every package the install steps name (tests/debian/*.txt)."""
-    names: List[str] = []
-    for path in sorted(LISTS.glob("*.txt")):
-        for line in path.read_text().splitlines():
-            names += line.split("#")[0].split()[:1]
-    return names
+    return [name for path in sorted(LISTS.glob("*.txt")) for name in listed(path)]
 
 
 @lru_cache(maxsize=1)

@@ -9,7 +9,7 @@ from typing import List
 
 from speech_event.adapters import ros_interfaces
 from tests.ros.conftest import ROOT
-from tests.ros.debian_packages import named_packages, not_installed_by_the_project
+from tests.ros.debian_packages import LISTS, listed, named_packages, not_installed_by_the_project
 
 # What the suite runs: roscore and roslaunch, catkin, the rosservice/rostopic commands, the X
 # server and screenshot tools of the window test, ip for the network namespaces.
@@ -77,7 +77,6 @@ def test_the_commands_the_suite_runs_come_from_named_packages() -> None:
 def test_the_readme_installs_exactly_the_ros_list() -> None:
     readme = (ROOT / "README.md").read_text()
     line = readme.split("sudo apt-get install -y ", 1)[1].split("\n    /usr/bin/python3", 1)[0]
-    listed = (ROOT / "tests" / "debian" / "ros.txt").read_text()
-    expected = [line.split("#")[0].split()[0] for line in listed.splitlines() if line.split("#")[0].strip()]
+    expected = listed(LISTS / "ros.txt")
     assert line.replace("\\", " ").split() == expected
     assert set(expected) <= set(named_packages())
