@@ -29,17 +29,18 @@ from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
 from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
-from speech_event.asr.engine import NemoRecognizer
-from speech_event.asr.features import FeatureSettings, features
-from speech_event.asr.manifest import family_of
-from speech_event.asr.whisper_engine import WhisperRecognizer
-from speech_event.asr.whisper_features import whisper_log_mel
-from speech_event.asr.whisper_model import DecoderSession
 from speech_event.config import SpeechEventConfig
+from speech_event.pipeline.resample import resample
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS
+from speech_event.recognizers.nemo.features import FeatureSettings, features
+from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
+from speech_event.recognizers.nemo.recognizer import NemoRecognizer
+from speech_event.recognizers.onnx.directory import family_of
 from speech_event.recognizers.sphinx import SphinxRecognizer
-from speech_event.resample import resample
+from speech_event.recognizers.whisper.features import whisper_log_mel
+from speech_event.recognizers.whisper.model import DecoderSession
+from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
 COMMANDS = [
     "hello pepper",
@@ -172,7 +173,10 @@ class _Said(logging.Handler):
 def _family_engine(directory: Path, cuda: bool) -> Recognizer:
     """The engine the node would build for this directory, as its family's ``model``."""
     config = SpeechEventConfig(
-        language="english", model=family_of(directory), en_model_path=str(directory), cuda=cuda
+        language="english",
+        model=family_of(directory, unrecorded=CONFORMER_TRANSDUCER),
+        en_model_path=str(directory),
+        cuda=cuda,
     )
     return RECOGNIZERS["auto"](config)
 

@@ -24,13 +24,13 @@ from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.asr.engine import NemoRecognizer
 from speech_event.config import SpeechEventConfig
-from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
-from speech_event.engines import EngineBuilder
+from speech_event.interfaces.language_engines import EngineBuilder
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import Float32MultiArray, SetEnabledRequest, SetLanguageRequest, String
 from speech_event.node import SpeechEventNode
 from speech_event.ports import Executor, Recognizer
+from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
 CONFIG = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0)

@@ -18,8 +18,8 @@ from typing import Callable, Dict, List
 
 from bench.nemo_parity import SENTENCES, _biased, _config, _conformer_rnnt, _tokenizer
 from bench.whisper_parity import random_checkpoint
-from speech_event.asr.export_nemo import export_model
-from speech_event.asr.export_whisper import export as export_whisper
+from speech_event.exporters.nemo import export_model
+from speech_event.exporters.whisper import export as export_whisper
 
 
 def _tokenizer_of(size: int, work: Path) -> Path:

@@ -44,11 +44,11 @@ from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
-from speech_event.asr.engine import NemoRecognizer
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
 from speech_event.ports import Recognizer, Transcript
+from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
 
@@ -73,7 +73,7 @@ class LargeConformerStandIn:
             raise RuntimeError("cancelled")
         return Transcript("")
 
-    def cancel(self) -> None:
+    def stop(self) -> None:
         self._cancelled.set()
 
 

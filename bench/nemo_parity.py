@@ -32,10 +32,10 @@ import numpy as np
 
 from fixtures.nemo_config import PREPROCESSOR
 from fixtures.tts import speak_tts
-from speech_event.asr.ctc_greedy import ctc_greedy
-from speech_event.asr.engine import NemoRecognizer
-from speech_event.asr.export_nemo import export
-from speech_event.asr.vocabulary import load_vocabulary
+from speech_event.exporters.nemo import export
+from speech_event.recognizers.nemo.ctc import ctc_greedy
+from speech_event.recognizers.nemo.recognizer import NemoRecognizer
+from speech_event.recognizers.nemo.vocabulary import load_vocabulary
 
 SENTENCES = [
     "go to the kitchen",

@@ -25,9 +25,9 @@ import numpy as np
 
 from bench.nemo_parity import SENTENCES, _as_16_bit
 from fixtures.tts import speak_tts
-from speech_event.asr.export_whisper import export
-from speech_event.asr.whisper_engine import WhisperRecognizer
-from speech_event.asr.whisper_features import whisper_log_mel
+from speech_event.exporters.whisper import export
+from speech_event.recognizers.whisper.features import whisper_log_mel
+from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
 SHAPES: Dict[str, Dict[str, int]] = {
     "tiny": {

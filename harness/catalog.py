@@ -10,13 +10,13 @@ import numpy as np
 
 from fixtures.audio import speak_tones
 from fixtures.tts import speak_tts
-from speech_event.asr.manifest import CONFORMER_TRANSDUCER, PARAKEET
-from speech_event.asr.whisper_manifest import WHISPER
 from speech_event.config import PATH_KEYS, SpeechEventConfig
-from speech_event.engines import EngineBuilder
+from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS as ENGINES
 from speech_event.recognizers import engine_builder
+from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, PARAKEET
+from speech_event.recognizers.whisper.manifest import WHISPER
 
 
 @dataclass(frozen=True)

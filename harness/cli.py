@@ -18,8 +18,8 @@ from harness.report import passed, report
 from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.asr.errors import ModelError
-from speech_event.config import ConfigError, SpeechEventConfig, load_config
+from speech_event.config import SpeechEventConfig, load_config
+from speech_event.errors import ConfigError, ModelError
 
 if TYPE_CHECKING:  # tkinter only when a window is asked for
     from speech_event.gui import TranscriptWindow

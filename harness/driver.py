@@ -20,8 +20,8 @@ import numpy as np
 from harness.gate import GateSettings, SpeechGate
 from speech_event.keyvalue import KeyRule, KeyValueFormat, choice, number, seconds, text
 from speech_event.messages import Float32MultiArray
+from speech_event.pipeline.resample import resample
 from speech_event.ports import Clock, Publisher
-from speech_event.resample import resample
 
 
 @dataclass(frozen=True)

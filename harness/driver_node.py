@@ -26,9 +26,8 @@ from harness.timeline import ComeUp, GoDown, Publish, build_timeline
 from harness.vad_gate import VadGate
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import without_remappings
-from speech_event.asr.errors import ModelError
 from speech_event.config import SpeechEventConfig, load_config
-from speech_event.keyvalue import ConfigError
+from speech_event.errors import ConfigError, ModelError
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Clock, Publisher
 

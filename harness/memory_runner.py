@@ -10,7 +10,7 @@ from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
-from speech_event.listen_action import ACTION_NAME
+from speech_event.interfaces.action import ACTION_NAME
 from speech_event.messages import Float32MultiArray, String, message_type_name
 from speech_event.node import SpeechEventNode
 

@@ -41,8 +41,8 @@ from harness.timeline import CallService, ComeUp, Event, GoDown, Publish, SendGo
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers
 from speech_event.config import format_config
-from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
-from speech_event.listen_action import ACTION_NAME
+from speech_event.interfaces.action import ACTION_NAME
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     RECOGNISE_SPEECH,
     SET_ENABLED,
@@ -51,7 +51,7 @@ from speech_event.messages import (
     ServiceType,
     message_type_name,
 )
-from speech_event.validate import Rejection, validate_signal
+from speech_event.pipeline.validate import Rejection, validate_signal
 
 ROOT = Path(__file__).resolve().parents[1]
 NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"

@@ -8,7 +8,7 @@ from typing import List, Optional
 from harness.catalog import engine_for
 from harness.scenario import ScenarioError, add_scenario_arguments, scenario_from_arguments
 from speech_event.application import build_recognizer, build_screen, run, without_remappings
-from speech_event.config import ConfigError
+from speech_event.errors import ConfigError
 
 
 def main(argv: Optional[List[str]] = None) -> int:

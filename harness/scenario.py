@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
 from harness.catalog import FIXTURE_PREFIX, RECOGNIZERS, VOICES
-from speech_event.config import PATH_KEYS, ConfigError, SpeechEventConfig, apply_overrides, load_config
+from speech_event.config import PATH_KEYS, SpeechEventConfig, apply_overrides, load_config
+from speech_event.errors import ConfigError
 
 if sys.version_info >= (3, 11):
     import tomllib

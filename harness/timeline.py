@@ -15,7 +15,7 @@ from fixtures.audio import noise
 from fixtures.malformed import BLOCK_SAMPLES, malformed_message
 from harness.catalog import VOICES
 from harness.scenario import Enable, Language, Listen, Malformed, Noise, Outage, Say, Scenario, Silence
-from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     Float32MultiArray,
     RecogniseSpeechGoal,

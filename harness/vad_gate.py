@@ -11,7 +11,7 @@ import numpy as np
 import soxr
 
 from harness.driver import DriverConfig
-from speech_event.vad import CONTEXT, SAMPLE_RATE, WINDOW, SileroVad, silero_model_path
+from speech_event.pipeline.vad import CONTEXT, SAMPLE_RATE, WINDOW, SileroVad, silero_model_path
 
 
 class VadGate:

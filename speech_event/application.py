@@ -10,12 +10,12 @@ import logging
 import sys
 from typing import List, Optional
 
-from speech_event.asr.errors import ModelError
-from speech_event.config import ConfigError, SpeechEventConfig, load_config
+from speech_event.config import SpeechEventConfig, load_config
+from speech_event.errors import ConfigError, ModelError, StorageError
+from speech_event.interfaces.storage import check_storage_dir
+from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS, engine_builder
-from speech_event.speech_screen import SpeechScreen, speech_screen_for
-from speech_event.storage import StorageError, check_storage_dir
 
 NODE_NAME = "speechEvent"
 # What ``run`` imports from ROS 1: a missing one means no ROS here, not a bug.
@@ -111,11 +111,11 @@ def without_remappings(argv: Optional[List[str]]) -> List[str]:
 def main(argv: Optional[List[str]] = None) -> int:
     raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
-        from speech_event.asr.export_nemo import main as export_nemo
+        from speech_event.exporters.nemo import main as export_nemo
 
         return export_nemo(raw[1:])
     if raw[:1] == ["export-whisper"]:
-        from speech_event.asr.export_whisper import main as export_whisper
+        from speech_event.exporters.whisper import main as export_whisper
 
         return export_whisper(raw[1:])
     arguments = _arguments(raw)

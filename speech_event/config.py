@@ -10,7 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping, Optional, Union
 
-from speech_event.keyvalue import ConfigError, KeyRule, KeyValueFormat, boolean, choice, number, seconds, text
+from speech_event.errors import ConfigError
+from speech_event.keyvalue import KeyRule, KeyValueFormat, boolean, choice, number, seconds, text
 
 __all__ = [
     "ConfigError",
@@ -29,7 +30,7 @@ class SpeechEventConfig:
     rw_model_path: str = ""
     en_model_path: str = ""
     # Empty: utterances are not stored. Otherwise each utterance is written there as a 16 kHz WAV
-    # file with a line in index.jsonl (speech_event/storage.py), the folder kept under this size.
+    # file with a line in index.jsonl (speech_event/interfaces/storage.py), the folder kept under this size.
     audio_storage_dir: str = ""
     audio_storage_max_mb: float = 500.0
     cuda: bool = False

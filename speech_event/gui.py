@@ -18,10 +18,9 @@ import time
 import tkinter as tk
 from typing import Callable, List, Optional, Tuple
 
-from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import without_remappings
-from speech_event.control import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
-from speech_event.diagnostics import DIAGNOSTICS_TOPIC
+from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     SET_ENABLED,
     SET_LANGUAGE,
@@ -34,6 +33,7 @@ from speech_event.messages import (
     String,
 )
 from speech_event.ports import Transport
+from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC
 
 # (service name, its type, request) -> response; raises when the service is not there.
 ServiceCall = Callable[[str, ServiceType, object], object]

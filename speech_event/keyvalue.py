@@ -12,12 +12,10 @@ import re
 from pathlib import Path
 from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Optional, Type, TypeVar, Union
 
+from speech_event.errors import ConfigError
+
 # No configuration is anywhere near this; reading more would only fill memory (/dev/zero).
 MAX_FILE_BYTES = 2**20
-
-
-class ConfigError(Exception):
-    """A configuration that cannot be used; the message says where and what is allowed."""
 
 
 class KeyRule(NamedTuple):

@@ -1,14 +1,17 @@
-"""The three ports the node depends on (plus the executor it is handed).
+"""The ports the node depends on: ``Transport``, ``Clock``, ``Recognizer`` and the ``Executor``.
 
 Adapters implement these: the in-memory bus and the rospy transport, the fake and ROS clocks,
-the recognition engines and their fakes.
+the recognition engines and their fakes, the simulated and threaded workers. What only some
+engines can do is a Protocol of its own (``Stoppable``, ``WholePhrases``), checked with
+``isinstance``: an engine has the ability by having its method.
 """
 
 import enum
 from dataclasses import dataclass
-from typing import Callable, Optional, Protocol
+from typing import Callable, Optional, Protocol, runtime_checkable
 
 import numpy as np
+import numpy.typing as npt
 
 from speech_event.messages import ActionType, ServiceType
 
@@ -96,25 +99,52 @@ class Cancellable(Protocol):
 class Executor(Protocol):
     """Runs jobs off the subscriber callback, one at a time, in submission order."""
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True) -> Cancellable:
-        """``recognizes``: the job runs a speech engine (a simulated worker charges recognition
-        time for it); False for one that only publishes a result already there."""
+    def submit(self, job: Callable[[], None]) -> Cancellable:
+        """Run ``job`` after every job submitted before it."""
         ...
+
+
+# Mono audio samples in [-1, 1]: what the node assembles and the engines transcribe.
+Audio = npt.NDArray[np.float32]
 
 
 @dataclass(frozen=True)
 class Transcript:
+    """What an engine made of one utterance."""
+
     text: str
     # In [0, 1] when the engine reports one; None when it does not.
     confidence: Optional[float] = None
 
 
 class Recognizer(Protocol):
+    """A speech engine: one utterance of audio in, its transcript out."""
+
     @property
     def sample_rate(self) -> int:
         """The rate, in Hz, of the audio ``transcribe`` expects."""
         ...
 
-    def transcribe(self, audio: np.ndarray) -> Transcript:
+    def transcribe(self, audio: Audio) -> Transcript:
         """Transcribe one utterance of mono float32 audio at ``sample_rate``."""
+        ...
+
+
+@runtime_checkable
+class Stoppable(Protocol):
+    """An engine whose running ``transcribe`` another thread can stop (recognition_timeout, and
+    speculation, which only runs on such an engine)."""
+
+    def stop(self) -> None:
+        """Stop the transcribe running now: it raises instead of answering."""
+        ...
+
+
+@runtime_checkable
+class WholePhrases(Protocol):
+    """An engine that may be set to answer only with whole phrases of a grammar."""
+
+    @property
+    def whole_phrases(self) -> bool:
+        """Whether every text it gives now is a whole phrase (a complete answer: early end of turn)."""
         ...

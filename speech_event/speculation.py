@@ -5,7 +5,7 @@ utterances always come first), the node hands the audio collected so far to the 
 pause then ends with no new block, the closed utterance *is* that audio, so the speculation's
 result is its result: published at once, or as soon as the speculation ends, instead of being
 recognized again from the start. A block that arrives first makes the speculation worthless: it
-is cancelled (with the engine's ``cancel`` where it has one, onnxruntime's RunOptions.terminate)
+is cancelled (with the engine's ``stop`` where it has one, onnxruntime's RunOptions.terminate)
 and its engine time counted as wasted. A speculation never publishes by itself, so the node
 publishes exactly the texts it would publish without speculating, never later.
 
@@ -16,12 +16,15 @@ answer lets the pause end after ``early_pause`` instead of ``speech_pause_period
 from dataclasses import dataclass
 from typing import FrozenSet, Optional
 
-from speech_event.ports import Cancellable, Recognizer, Timer
-from speech_event.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.config import SpeechEventConfig
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.ports import Cancellable, Recognizer, Stoppable, Timer, Transcript, WholePhrases
 
 
 @dataclass
 class SpeculationCounts:
+    """How speculation fared on this node."""
+
     started: int = 0
     used: int = 0  # their result was the closed utterance's
     wasted_seconds: float = 0.0  # engine time of speculations that more audio made worthless
@@ -39,10 +42,9 @@ class Speculation:
         self.running = False
         self.cancelled = False
         self.outcome: Optional[RecognitionOutcome] = None
-        # The closed utterance this speculation turned out to be, while it still runs: the
-        # speculation's end publishes it.
+        # The closed utterance this speculation turned out to be: its outcome is that utterance's.
         self.adopted: Optional[RecognitionJob] = None
-        self.watchdog: Optional[Timer] = None  # recognition_timeout, once adopted
+        self.watchdog: Optional[Timer] = None  # recognition_timeout, once adopted while running
 
     def is_for(self, samples: int, recognizer: Recognizer) -> bool:
         """Whether a closed utterance of ``samples`` samples, bound to ``recognizer``, is exactly the
@@ -54,12 +56,103 @@ class Speculation:
         self.cancelled = True
         if self.handle is not None:
             self.handle.cancel()
-        stop = getattr(self.recognizer, "cancel", None)
-        if self.running and stop is not None:
-            stop()
+        if self.running and isinstance(self.recognizer, Stoppable):
+            self.recognizer.stop()
+
+
+class SpeculationRules:
+    """When to speculate, when a closed utterance adopts a speculation, when to drop one, and
+    whether its text ends the turn early. At most one speculation at a time; every method is
+    called under the node's lock."""
+
+    def __init__(self, config: SpeechEventConfig) -> None:
+        self._wanted = config.speculative_recognition
+        self._answers = complete_answers(config.complete_answers)
+        self.counts = SpeculationCounts()
+        self.current: Optional[Speculation] = None
+        self._last_text: Optional[str] = None  # the text of this utterance's last speculation
+
+    def may_start(self, recognizer: Recognizer, worker_idle: bool) -> bool:
+        """Whether to speculate now with ``recognizer``: only with an engine that can be stopped
+        (one that cannot would run a speculation made worthless to its end, and an utterance
+        closing meanwhile would wait for it: pocketsphinx, whose texts also depend on what it
+        heard before), only while the worker is idle (closed utterances first), one at a time."""
+        return self._wanted and isinstance(recognizer, Stoppable) and worker_idle and self.current is None
+
+    def start(self, samples: int, recognizer: Recognizer) -> Speculation:
+        """Speculate on the first ``samples`` of the utterance being collected."""
+        self.current = Speculation(samples, recognizer)
+        self.counts.started += 1
+        return self.current
+
+    def drop(self) -> None:
+        """The speculation being collected for is worthless now (not one that a closed utterance
+        adopted: that one is its recognition)."""
+        speculation = self.current
+        if speculation is None or speculation.adopted is not None:
+            return
+        self.current = None
+        speculation.cancel()
+        if speculation.outcome is not None:
+            self.counts.wasted_seconds += speculation.outcome.took
+
+    def new_utterance(self) -> None:
+        """The utterance ended or was dropped: the next one's texts are compared afresh."""
+        self._last_text = None
+
+    def adopt(self, job: RecognitionJob) -> Optional[Speculation]:
+        """A closed utterance: the speculation on exactly its audio and engine becomes its
+        recognition (its outcome may be there already); None when there is none (a speculation
+        on other audio is dropped: that utterance comes first)."""
+        speculation = self.current
+        if speculation is None or speculation.adopted is not None:
+            return None
+        if not speculation.is_for(job.audio.size, job.recognizer):
+            self.drop()
+            return None
+        speculation.adopted = job
+        if speculation.outcome is not None:
+            self.current = None
+            self.counts.used += 1
+        return speculation
+
+    def finished(self, speculation: Speculation, outcome: RecognitionOutcome) -> Optional[RecognitionJob]:
+        """A speculation's recognition ended: the closed utterance whose result it is, or None
+        (cancelled, or the utterance is still being collected)."""
+        speculation.running = False
+        if speculation.watchdog is not None:
+            speculation.watchdog.cancel()
+        if speculation.cancelled:
+            self.counts.wasted_seconds += outcome.took
+            return None
+        speculation.outcome = outcome
+        job = speculation.adopted
+        if job is not None:
+            self.current = None
+            self.counts.used += 1
+        return job
+
+    def ends_turn(self, speculation: Speculation) -> bool:
+        """Whether a finished speculation, not adopted, is a complete answer (remembered for the
+        next one): in grammar mode any text, else one of complete_answers or the same text as
+        the speculation before it on this utterance."""
+        if speculation.cancelled or speculation.adopted is not None or speculation.outcome is None:
+            return False
+        answer = speculation.outcome.answer
+        text = answer.text if isinstance(answer, Transcript) else ""
+        recognizer = speculation.recognizer
+        grammar_mode = isinstance(recognizer, WholePhrases) and recognizer.whole_phrases
+        complete = is_complete(text, self._last_text, grammar_mode, self._answers)
+        self._last_text = text
+        return complete
+
+    def running_for(self, job: RecognitionJob) -> bool:
+        """Whether ``job``'s recognition is a speculation that runs now."""
+        return self.current is not None and self.current.adopted is job and self.current.running
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:
+    """The complete_answers setting as a set of lower-case answers."""
     return frozenset(word.strip().lower() for word in setting.split(",") if word.strip())
 
 

@@ -14,9 +14,8 @@ from speech_event.config import (
     load_config,
     parse_config,
 )
-from tests.application import run_application
-
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers.application import run_application
+from tests.helpers.paths import ROOT
 
 
 def test_a_file_sets_keys_in_every_accepted_form_and_leaves_the_rest_at_defaults() -> None:

@@ -15,7 +15,7 @@ from fixtures.audio import speak_tones
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray, MultiArrayDimension, String
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.rig import Rig
+from tests.helpers.rig import Rig
 
 CONFIG = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0, max_message_length=1.0)
 SPEECH = speak_tones("go left", 16000)

@@ -14,11 +14,11 @@ from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig, apply_overrides
 from speech_event.messages import Float32MultiArray
 from speech_event.node import SpeechEventNode
+from speech_event.pipeline.resample import resample
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
-from speech_event.resample import resample
-from tests.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
-from tests.rig import AT_16K, Rig
+from tests.helpers.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
+from tests.helpers.rig import AT_16K, Rig
 
 
 def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published_in_order() -> None:

@@ -15,13 +15,13 @@ from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.assembly import search_samples
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from speech_event.node import SpeechEventNode
-from speech_event.validate import Reason, Rejection, validate_signal
-from tests.fakes import SpyRecognizer
-from tests.strategies import audio
+from speech_event.pipeline.assembly import search_samples
+from speech_event.pipeline.validate import Reason, Rejection, validate_signal
+from tests.helpers.fakes import SpyRecognizer
+from tests.helpers.strategies import audio
 
 CONFIG = SpeechEventConfig(
     sample_rate=16000,  # the recognizer's rate: no resampling, so samples can be compared exactly

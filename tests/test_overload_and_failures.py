@@ -10,8 +10,8 @@ import pytest
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.ports import Transcript
-from tests.fakes import SpyRecognizer
-from tests.rig import Rig
+from tests.helpers.fakes import SpyRecognizer
+from tests.helpers.rig import Rig
 
 HALF_SECOND = np.full(8000, 0.1, dtype=np.float32)
 UNRECOGNIZED = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0, publish_unrecognized=True)
@@ -151,7 +151,7 @@ class Hanging(SpyRecognizer):
         self.started = threading.Event()
         self.release = threading.Event()
         if cancellable:
-            self.cancel = self.release.set
+            self.stop = self.release.set
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         super().transcribe(audio)
@@ -159,7 +159,7 @@ class Hanging(SpyRecognizer):
             self.started.set()
             if not self.release.wait(timeout=30):
                 raise TimeoutError("never released")
-            if hasattr(self, "cancel"):
+            if hasattr(self, "stop"):
                 raise RuntimeError("Exiting due to terminate flag being set to true")
         return Transcript("heard")
 

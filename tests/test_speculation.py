@@ -25,8 +25,8 @@ from speech_event.messages import Float32MultiArray
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.speculation import complete_answers, is_complete
-from tests.rig import Rig
-from tests.scenario_files import SCENARIOS
+from tests.helpers.rig import Rig
+from tests.helpers.scenario_files import SCENARIOS
 
 RATE = 16000
 PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)
@@ -45,7 +45,7 @@ class AudioDigest:
         self.calls += 1
         return Transcript(f"{audio.size} {float(np.sum(audio.astype(np.float64))):.6f}")
 
-    def cancel(self) -> None:
+    def stop(self) -> None:
         """Stops at once (the simulated worker is free when a speculation is cancelled)."""
 
 

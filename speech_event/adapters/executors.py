@@ -40,9 +40,9 @@ class _ClockJob:
 class ClockExecutor:
     """A single worker simulated on a clock: deterministic, for the fake clock.
 
-    A job starts when the worker is free and finishes ``job_seconds`` of clock time later (no time
-    for a job that recognizes nothing), which is when it runs. With 0 it runs right after the
-    callback that submitted it, at the same time.
+    A job starts when the worker is free and finishes ``job_seconds`` of clock time later (the
+    simulated recognition time), which is when it runs. With 0 it runs right after the callback
+    that submitted it, at the same time.
     """
 
     def __init__(self, clock: Clock, job_seconds: float = 0.0) -> None:
@@ -59,9 +59,10 @@ class ClockExecutor:
         """The last job was cancelled: the worker is free from ``when``."""
         self._free_at = when
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ClockJob:
+    def submit(self, job: Callable[[], None]) -> _ClockJob:
+        """Run ``job`` once the worker is free and ``job_seconds`` have passed."""
         start = max(self._free_at, self.clock.now())
-        finish = start + (self._job_seconds if recognizes else 0.0)
+        finish = start + self._job_seconds
         self._free_at = finish
         return _ClockJob(self, job, start, finish)
 
@@ -84,7 +85,8 @@ class ThreadExecutor:
         self._thread = threading.Thread(target=self._work, name=name, daemon=True)
         self._thread.start()
 
-    def submit(self, job: Callable[[], None], recognizes: bool = True) -> _ThreadJob:
+    def submit(self, job: Callable[[], None]) -> _ThreadJob:
+        """Queue ``job`` for the worker thread."""
         handle = _ThreadJob(job)
         self._jobs.put(handle)
         return handle

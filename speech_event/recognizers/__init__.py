@@ -10,13 +10,14 @@ import dataclasses
 from pathlib import Path
 from typing import Callable, Dict
 
-from speech_event.asr.errors import ModelError
-from speech_event.asr.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES, family_of
-from speech_event.asr.whisper_manifest import WHISPER
 from speech_event.config import SpeechEventConfig
-from speech_event.engines import EngineBuilder
+from speech_event.errors import ModelError
+from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
+from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES
+from speech_event.recognizers.onnx.directory import family_of
 from speech_event.recognizers.tones import ToneRecognizer
+from speech_event.recognizers.whisper.manifest import WHISPER
 
 RecognizerFactory = Callable[[SpeechEventConfig], Recognizer]
 
@@ -32,7 +33,7 @@ def _model_directory(config: SpeechEventConfig) -> Path:
             f"exported {config.model} model (speech-event {exporter} DIR writes one)"
         )
     directory = Path(path)
-    family = family_of(directory)
+    family = family_of(directory, unrecorded=CONFORMER_TRANSDUCER)
     if directory.is_dir() and family != config.model:
         raise ModelError(
             f"{directory} holds a {family} model (config.json: family), but model is {config.model}: "
@@ -43,7 +44,7 @@ def _model_directory(config: SpeechEventConfig) -> Path:
 
 def nemo(config: SpeechEventConfig) -> Recognizer:
     """The exported NeMo model of the configured language, of the family ``model`` names."""
-    from speech_event.asr.engine import NemoRecognizer
+    from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 
     if config.model not in NEMO_FAMILIES:
         raise ModelError(f"model {config.model} is not a NeMo family ({', '.join(NEMO_FAMILIES)})")
@@ -52,7 +53,7 @@ def nemo(config: SpeechEventConfig) -> Recognizer:
 
 def whisper(config: SpeechEventConfig) -> Recognizer:
     """The exported Whisper model of the configured language (model whisper)."""
-    from speech_event.asr.whisper_engine import WhisperRecognizer
+    from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
     if config.model != WHISPER:
         raise ModelError(f"the whisper engine needs model whisper; model is {config.model}")

@@ -12,7 +12,7 @@ from typing import Dict, List, Optional, Set
 
 import numpy as np
 
-from speech_event.asr.errors import ModelError
+from speech_event.errors import ModelError
 from speech_event.ports import Transcript
 
 SAMPLE_RATE = 16000

@@ -79,5 +79,5 @@ class ToneRecognizer:
     def transcribe(self, audio: np.ndarray) -> Transcript:
         return Transcript(decode_tones(audio, self.sample_rate))
 
-    def cancel(self) -> None:
+    def stop(self) -> None:
         """Nothing to stop: decoding takes a few milliseconds (so speculation may use this engine)."""

@@ -15,8 +15,7 @@ import rospy
 from harness.ros_runner import Processes, free_port
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.ros import master_answers
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.helpers.paths import ROOT
 
 
 def ros_environment(master_port: int, tmp_path: Path) -> Dict[str, str]:

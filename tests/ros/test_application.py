@@ -21,8 +21,9 @@ from fixtures.whisper_tones_model import whisper_tones_model_directory
 from harness.ros_runner import Processes, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
-from tests.application import APPLICATION
-from tests.ros.conftest import ROOT, ros_environment, spoken, wait_for
+from tests.helpers.application import APPLICATION
+from tests.helpers.paths import ROOT
+from tests.ros.conftest import ros_environment, spoken, wait_for
 
 
 def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:

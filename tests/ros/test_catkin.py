@@ -9,8 +9,8 @@ from pathlib import Path
 
 from speech_event.msg import RecogniseSpeechAction
 from speech_event.srv import SetEnabled, SetLanguage
-from tests.ros.conftest import ROOT
-from tests.ros.debian_packages import not_installed_by_the_project
+from tests.helpers.debian_packages import not_installed_by_the_project
+from tests.helpers.paths import ROOT
 
 
 def _configuration_files(cache: Path) -> "list[str]":

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import List
 
 from speech_event.adapters import ros_interfaces
-from tests.ros.conftest import ROOT
-from tests.ros.debian_packages import LISTS, listed, named_packages, not_installed_by_the_project
+from tests.helpers.debian_packages import LISTS, listed, named_packages, not_installed_by_the_project
+from tests.helpers.paths import ROOT
 
 # What the suite runs: roscore and roslaunch, catkin, the rosservice/rostopic commands, the X
 # server and screenshot tools of the window test, ip for the network namespaces.
@@ -33,7 +33,7 @@ IMPORTED = (
     "harness.ros_checker",
     "harness.driver_node",
     "tests.ros.conftest",
-    "tests.ros.two_hosts",
+    "tests.helpers.two_hosts",
 )
 
 

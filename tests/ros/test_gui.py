@@ -29,7 +29,7 @@ from speech_event.gui import ERROR_COLOUR, TranscriptWindow, status_of
 from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, KeyValue, String
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.application import APPLICATION
+from tests.helpers.application import APPLICATION
 from tests.ros.conftest import wait_for
 
 NOON = 12 * 3600.0

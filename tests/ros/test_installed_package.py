@@ -14,7 +14,8 @@ import rospy
 
 from harness.ros_runner import Processes
 from speech_event.srv import SetLanguage
-from tests.ros.conftest import ROOT, serves, wait_for
+from tests.helpers.paths import ROOT
+from tests.ros.conftest import serves, wait_for
 
 
 @pytest.fixture(scope="module")

@@ -15,8 +15,9 @@ import soundfile
 from fixtures.audio import speak_tones
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from tests.ros.conftest import ROOT, ros_environment, serves, spoken, wait_for
-from tests.ros.text_listener import received, write_listener
+from tests.helpers.paths import ROOT
+from tests.helpers.text_listener import received, write_listener
+from tests.ros.conftest import ros_environment, serves, spoken, wait_for
 
 LAUNCH = ROOT / "launch"
 

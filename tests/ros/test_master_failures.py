@@ -18,9 +18,9 @@ import rosgraph
 
 from harness.ros_runner import Processes, descendants, free_port
 from speech_event.adapters.ros import master_answers
-from tests.application import APPLICATION
+from tests.helpers.application import APPLICATION
+from tests.helpers.text_listener import assert_errors_on_time, received, write_listener
 from tests.ros.conftest import ros_environment, serves, wait_for
-from tests.ros.text_listener import assert_errors_on_time, received, write_listener
 
 FREEZE_SECONDS = 8.0
 PERIOD = 1.0

@@ -12,8 +12,9 @@ import pytest
 import rosgraph
 
 from harness.ros_runner import descendants, route_address
-from tests.ros.conftest import ROOT, ros_environment
-from tests.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
+from tests.helpers.paths import ROOT
+from tests.helpers.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
+from tests.ros.conftest import ros_environment
 
 # Real time replays every scenario on the wall clock (about 500 s in all): in parts, side by side.
 REAL_TIME_SHARDS = 8

@@ -24,7 +24,7 @@ from fixtures.audio import speak_tones
 from harness.ros_runner import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
-from tests.application import APPLICATION
+from tests.helpers.application import APPLICATION
 from tests.ros.conftest import serves, wait_for
 
 ROBOT_PACKAGE = "cssr_system"

@@ -15,7 +15,8 @@ from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosClock, RosTransport
 from speech_event.messages import Float32MultiArray, String
 from speech_event.ports import PublisherStatus
-from tests.ros.conftest import ROOT, wait_for
+from tests.helpers.paths import ROOT
+from tests.ros.conftest import wait_for
 
 STAND_IN = [
     sys.executable,

@@ -1,6 +1,6 @@
 """Speech Event on one host, roscore, the harness and soundDetection on another (issue 12).
 
-The hosts are two network namespaces joined by a veth pair (tests/ros/two_hosts.py). The test
+The hosts are two network namespaces joined by a veth pair (tests/helpers/two_hosts.py). The test
 process itself stays in the machine's own namespace and never addresses the pair: everything that
 talks to the master runs on one of the two hosts.
 """
@@ -17,11 +17,12 @@ import pytest
 from harness.ros_runner import Processes
 from harness.scenario import load_scenario
 from speech_event.config import SpeechEventConfig
-from tests.application import APPLICATION
-from tests.ros.conftest import ROOT, ros_environment, wait_for
-from tests.ros.text_listener import assert_errors_on_time, received, write_listener
-from tests.ros.two_hosts import Host, TwoHosts, two_hosts
-from tests.scenario_files import shard
+from tests.helpers.application import APPLICATION
+from tests.helpers.paths import ROOT
+from tests.helpers.scenario_files import shard
+from tests.helpers.text_listener import assert_errors_on_time, received, write_listener
+from tests.helpers.two_hosts import Host, TwoHosts, two_hosts
+from tests.ros.conftest import ros_environment, wait_for
 
 MASTER_PORT = 11311  # the namespaces are the test's own: the standard port is free there
 PERIOD = 1.0

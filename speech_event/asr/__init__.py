@@ -1,1 +1,0 @@
-"""The NeMo conformer-transducer engine: features, ONNX model, greedy decoding, vocabulary."""

@@ -1,0 +1,31 @@
+"""The speech engine of each language: the configured one, and the other built when it is asked for.
+
+``set_language`` builds the other language's engine on the service's own thread (never the
+subscriber callback, never the recognition worker), once: a later switch back and forth reuses it.
+"""
+
+import threading
+from typing import Callable, Dict, Optional
+
+from speech_event.errors import ModelError
+from speech_event.ports import Recognizer
+
+# language -> its engine; raises ModelError (with what is wrong) when it cannot be built.
+EngineBuilder = Callable[[str], Recognizer]
+
+
+class LanguageEngines:
+    def __init__(self, language: str, recognizer: Recognizer, build: Optional[EngineBuilder] = None) -> None:
+        self._engines: Dict[str, Recognizer] = {language: recognizer}
+        self._build = build
+        # Two set_language calls at once build an engine once.
+        self._lock = threading.Lock()
+
+    def engine(self, language: str) -> Recognizer:
+        """The engine of ``language``, built now if it was not yet; ModelError if it cannot be."""
+        with self._lock:
+            if language not in self._engines:
+                if self._build is None:
+                    raise ModelError(f"this node was started with no way to build a {language} engine")
+                self._engines[language] = self._build(language)
+            return self._engines[language]

@@ -1,0 +1,81 @@
+"""onnxruntime sessions for the engines' model files: the execution providers, clear errors for a
+missing or unloadable file, and the check of a file's tensor names and ranks."""
+
+import logging
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import onnxruntime
+
+from speech_event.errors import ModelError
+
+_LOG = logging.getLogger("speech_event")
+
+
+def providers(cuda: bool) -> List[str]:
+    """CUDA when asked for and onnxruntime has it; otherwise the CPU, with a warning if CUDA was asked for."""
+    if not cuda:
+        return ["CPUExecutionProvider"]
+    if "CUDAExecutionProvider" in onnxruntime.get_available_providers():
+        return ["CUDAExecutionProvider", "CPUExecutionProvider"]
+    _LOG.warning("cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU")
+    return ["CPUExecutionProvider"]
+
+
+def open_session(
+    path: Path, execution_providers: List[str], directory_holds: str
+) -> onnxruntime.InferenceSession:
+    """``directory_holds``: what a model directory of this kind holds, said when the file is missing."""
+    if not path.is_file():
+        raise ModelError(f"{path.parent}: missing {path.name}; {directory_holds}")
+    options = onnxruntime.SessionOptions()
+    options.log_severity_level = 3
+    try:
+        return onnxruntime.InferenceSession(str(path), options, providers=execution_providers)
+    except Exception as problem:  # onnxruntime raises its own exception types
+        raise ModelError(f"{path}: onnxruntime cannot load it: {problem}") from None
+
+
+def last_dimension(session: onnxruntime.InferenceSession, output: str) -> Optional[int]:
+    """The size of ``output``'s last dimension when the file fixes it (logits per step), else None."""
+    size = next(arg.shape[-1] for arg in session.get_outputs() if arg.name == output)
+    return size if isinstance(size, int) else None
+
+
+class StoppableRuns:
+    """The RunOptions of the transcription running now, so that another thread can stop it
+    (the node's recognition_timeout and speculative recognition do): its next session run raises."""
+
+    def __init__(self) -> None:
+        self._current: Optional[onnxruntime.RunOptions] = None
+
+    def start(self) -> onnxruntime.RunOptions:
+        run = onnxruntime.RunOptions()
+        self._current = run
+        return run
+
+    def stop(self) -> None:
+        run = self._current
+        if run is not None:
+            run.terminate = True
+
+
+def _describe(expected: Dict[str, int]) -> str:
+    return ", ".join(f"{name} ({rank}-D)" if rank > 0 else name for name, rank in expected.items())
+
+
+def check_tensors(
+    path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected: Dict[str, int], exporter: str
+) -> None:
+    """The ``kind`` (inputs or outputs) ``found`` must have the ``expected`` names and ranks (-1: any)."""
+    shapes = {arg.name: arg.shape for arg in found}
+    missing = [name for name in expected if name not in shapes]
+    wrong_rank = [
+        f"{name} is {len(shapes[name])}-D"
+        for name, rank in expected.items()
+        if name in shapes and rank > 0 and len(shapes[name]) != rank
+    ]
+    if missing or wrong_rank:
+        problem = f"missing {', '.join(missing)}" if missing else "; ".join(wrong_rank)
+        found_names = f"{path}: {kind} are {sorted(shapes)} ({problem})"
+        raise ModelError(f"{found_names}; {path.name} of {exporter} has {_describe(expected)}")

@@ -1,0 +1,2 @@
+"""Whisper on onnxruntime: log-mel features -> encoder -> greedy decoding with Whisper's rules ->
+byte tokens."""

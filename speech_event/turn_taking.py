@@ -1,0 +1,124 @@
+"""Turn-taking: when the utterance being collected ends, and when the speaker has paused enough to
+speculate on it.
+
+An utterance ends ``speech_pause_period`` after its latest block, or ``early_pause`` after it once
+a speculation found a complete answer (early end of turn). Speculation may start
+``speculation_gap`` after the latest block. Each is one timer per utterance, not one per block:
+set at the first block, and when it fires early (more blocks came since) set again for the time
+after the latest block. Every method is called under the node's lock; the timers take it.
+"""
+
+import threading
+from typing import Callable, Optional
+
+from speech_event.config import SpeechEventConfig
+from speech_event.ports import Clock, Timer
+
+# A timer may fire a little early (RosClock fires 0.1 ms early against nanosecond rounding); a
+# timer that fires within this of its time has come due, rather than being set again.
+TIMER_TOLERANCE = 1e-3
+
+
+class RearmingTimer:
+    """Calls ``on_due`` under ``lock`` once the clock reaches ``due()``, which may move later."""
+
+    def __init__(
+        self, clock: Clock, lock: threading.Lock, due: Callable[[], float], on_due: Callable[[], None]
+    ) -> None:
+        self._clock = clock
+        self._lock = lock
+        self._due = due
+        self._on_due = on_due
+        self._timer: Optional[Timer] = None
+
+    @property
+    def armed(self) -> bool:
+        """Whether the timer is set (it has not fired since it was)."""
+        return self._timer is not None
+
+    def arm(self) -> None:
+        """Set the timer for ``due()``, unless it is set already."""
+        if self._timer is None:
+            self._timer = self._clock.call_at(max(self._clock.now(), self._due()), self._fire)
+
+    def rearm(self) -> None:
+        """Set the timer for ``due()`` now, which may be sooner than it was set for."""
+        self.cancel()
+        self.arm()
+
+    def cancel(self) -> None:
+        """Unset the timer."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _fire(self) -> None:
+        with self._lock:
+            self._timer = None
+            if self._clock.now() < self._due() - TIMER_TOLERANCE:
+                self.arm()
+                return
+            self._on_due()
+
+
+class TurnTaking:
+    """The pause that ends an utterance and the gap that lets speculation start, on one clock."""
+
+    def __init__(
+        self,
+        config: SpeechEventConfig,
+        clock: Clock,
+        lock: threading.Lock,
+        on_pause_end: Callable[[], None],
+        on_gap: Callable[[], None],
+    ) -> None:
+        """``on_pause_end`` closes the utterance; ``on_gap`` may speculate (both under ``lock``)."""
+        self._config = config
+        self._clock = clock
+        self.last_arrival = 0.0
+        self._ends_early = False  # this utterance's speculation is a complete answer
+        self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
+        self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap)
+
+    def heard(self, when: float) -> None:
+        """A block arrived at ``when``: the pause starts again, and the gap."""
+        self.last_arrival = when
+        self._ends_early = False
+        self._pause.arm()
+        if self._config.speculative_recognition:
+            self._gap.arm()
+
+    def end_early(self) -> None:
+        """A speculation found a complete answer: the turn ends after early_pause (when set)."""
+        if self._config.early_pause <= 0:
+            return
+        self._ends_early = True
+        self._pause.rearm()
+
+    def gap_passed(self) -> bool:
+        """Whether the speaker has paused for speculation_gap since the latest block."""
+        return not self._gap.armed and self._clock.now() >= self._gap_due() - TIMER_TOLERANCE
+
+    def drop_turn(self) -> None:
+        """The utterance being collected is thrown away: no pause is waited for."""
+        self._ends_early = False
+        self._pause.cancel()
+
+    def stop(self) -> None:
+        """Unset both timers."""
+        self._pause.cancel()
+        self._gap.cancel()
+
+    def _pause_due(self) -> float:
+        pause = self._config.early_pause if self._ends_early else self._config.speech_pause_period
+        return self.last_arrival + pause
+
+    def _gap_due(self) -> float:
+        return self.last_arrival + self._config.speculation_gap
+
+    def _pause_ended(self, close: Callable[[], None]) -> Callable[[], None]:
+        def ended() -> None:
+            self._ends_early = False
+            close()
+
+        return ended

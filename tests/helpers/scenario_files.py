@@ -1,0 +1,25 @@
+"""The scenario files, and those written for the fake engine in the tones voice (the others name
+the engine they need): every engine that transcribes the tones voice passes those."""
+
+from pathlib import Path
+from typing import List
+
+from harness.scenario import load_scenario
+from speech_event.config import SpeechEventConfig
+from tests.helpers.paths import ROOT
+
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def _for_the_fake_in_tones(path: Path) -> bool:
+    scenario = load_scenario(path, SpeechEventConfig())
+    return (scenario.voice, scenario.recognizer) == ("tones", "fake")
+
+
+TONES_SCENARIOS = [path for path in SCENARIOS if _for_the_fake_in_tones(path)]
+
+
+def shard(paths: List[Path], index: int, count: int) -> List[Path]:
+    """Every ``count``-th scenario from ``index``: the ROS replays run as ``count`` tests, which
+    pytest-xdist's workers take side by side (each replay has its own roscore)."""
+    return paths[index::count]
