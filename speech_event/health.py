@@ -2,29 +2,17 @@
 the heartbeat line in verbose mode."""
 
 import logging
-from dataclasses import dataclass
-from typing import Callable, Dict, List
+from typing import Callable, List
 
 from speech_event.config import SpeechEventConfig
-from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, diagnostic_array
+from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, NodeState, NodeStatistics, diagnostic_array
 from speech_event.messages import DiagnosticArray, DiagnosticStatus
 from speech_event.periodic import Periodic
+from speech_event.pipeline.screen import Discard
 from speech_event.ports import Clock, PublisherStatus, Transport
 from speech_event.topics import SIGNAL_TOPIC
 
 _LOG = logging.getLogger("speech_event")
-
-
-@dataclass(frozen=True)
-class Activity:
-    """What the node has done so far, for the heartbeat."""
-
-    utterances: int
-    rejected: Dict[str, int]
-    clipped: int
-    queued_seconds: float
-    dropped: int
-    timed_out: int
 
 
 class Health:
@@ -35,18 +23,18 @@ class Health:
         config: SpeechEventConfig,
         transport: Transport,
         clock: Clock,
+        statistics: NodeStatistics,
+        state: Callable[[PublisherStatus], NodeState],
         on_down: Callable[[], None],
-        status: Callable[[], DiagnosticStatus],
-        activity: Callable[[], Activity],
     ) -> None:
-        """``on_down`` says soundDetection is down; ``status`` is the node's diagnostic status;
-        ``activity`` what the heartbeat reports."""
+        """``state(sound_detection)`` is what the node says about itself; ``on_down`` says
+        soundDetection is down."""
         self._config = config
         self._transport = transport
         self._clock = clock
+        self._statistics = statistics
+        self._state = state
         self._on_down = on_down
-        self._status = status
-        self._activity = activity
         self.sound_detection = PublisherStatus.CONNECTED  # as the last check found it
         self._periodic: List[Periodic] = []
 
@@ -57,7 +45,7 @@ class Health:
 
         def check() -> None:
             self.check()
-            diagnostics.publish(diagnostic_array(self._clock.now(), self._status()))
+            diagnostics.publish(diagnostic_array(self._clock.now(), self.status()))
 
         self._periodic.append(Periodic(self._clock, self._config.health_check_period, check, started_at))
         if self._config.verbose_mode and self._config.heartbeat_msg_period > 0:
@@ -78,9 +66,14 @@ class Health:
             self._on_down()
             _LOG.warning("soundDetection is down on %s: %s", SIGNAL_TOPIC, status.value)
 
+    def status(self) -> DiagnosticStatus:
+        """The node's /diagnostics status now."""
+        state = self._state(self.sound_detection)
+        return self._statistics.status(state, [reason.value for reason in Discard])
+
     def heartbeat(self) -> None:
         """Log that the node runs, with what it has done."""
-        activity = self._activity()
+        activity = self._state(self.sound_detection)
         _LOG.info(
             "speechEvent running: %d utterances so far, rejected messages %s, clipped messages %d, "
             "%.1f s of speech waiting for recognition, %d dropped (max_backlog), %d timed out",

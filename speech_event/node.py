@@ -19,7 +19,7 @@ import time
 from typing import Callable, Dict, Optional
 
 from speech_event.config import SpeechEventConfig
-from speech_event.health import Activity, Health
+from speech_event.health import Health
 from speech_event.interfaces.action import ACTION_NAME, DISABLED, ListenAction
 from speech_event.interfaces.diagnostics import (
     DISCARDED_BACKLOG,
@@ -29,25 +29,18 @@ from speech_event.interfaces.diagnostics import (
 )
 from speech_event.interfaces.language_engines import EngineBuilder, LanguageEngines
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE, RuntimeControl
-from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
-from speech_event.messages import (
-    RECOGNISE_SPEECH,
-    SET_ENABLED,
-    SET_LANGUAGE,
-    DiagnosticStatus,
-    Float32MultiArray,
-    String,
-)
+from speech_event.interfaces.storage import store_for
+from speech_event.messages import RECOGNISE_SPEECH, SET_ENABLED, SET_LANGUAGE, Float32MultiArray
 from speech_event.pipeline.assembly import UtteranceAssembler
-from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome, RecognitionQueue
+from speech_event.pipeline.publication import Publication
+from speech_event.pipeline.recognition import Recognition
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
-from speech_event.pipeline.resample import resample
-from speech_event.pipeline.screen import Discard, SpeechScreen, speech_screen_for
-from speech_event.pipeline.transcript import checked_transcript, text_to_publish
+from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
-from speech_event.ports import Audio, Clock, Executor, Publisher, Recognizer, Timer, Transcript, Transport
+from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Timer, Transport
 from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules
-from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, TEXT_TOPIC
+from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
 from speech_event.turn_taking import TurnTaking
 from speech_event.watchdog import Watchdog
 
@@ -75,22 +68,19 @@ class SpeechEventNode:
         self._transport = transport
         self._clock = clock
         self._executor = executor
-        self._stopwatch = stopwatch
-        self._screen = screen or speech_screen_for(config)
+        screen = screen or speech_screen_for(config)
+        self._recognition = Recognition(config.sample_rate, screen, stopwatch)
         self._max_samples = int(config.max_message_length * config.sample_rate)
         self._assembler = UtteranceAssembler(
-            config.sample_rate, config.max_utterance_length, self._screen.non_speech
+            config.sample_rate, config.max_utterance_length, screen.non_speech
         )
         self._rejections = RejectionLog(clock.now, SIGNAL_TOPIC)
-        self._store = (
-            UtteranceStore(config.audio_storage_dir, config.sample_rate, config.audio_storage_max_mb)
-            if config.audio_storage_dir
-            else None
-        )
+        self._store = store_for(config)
         self._statistics = NodeStatistics()
         self._queue = RecognitionQueue(config.max_backlog)
         self._running: Optional[RecognitionJob] = None  # the utterance being recognized
         self._action = ListenAction(clock, self._refusal)
+        self._publication = Publication(config, self._statistics, self._action, self._store)
         self._control = RuntimeControl(
             LanguageEngines(config.language, recognizer, build_engine),
             lambda: self._language,
@@ -109,10 +99,9 @@ class SpeechEventNode:
         self._speculation = SpeculationRules(config)
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         self._health = Health(
-            config, transport, clock, self._sound_detection_down, self.diagnostic_status, self._activity
+            config, transport, clock, self._statistics, self._state, self._sound_detection_down
         )
         self._utterances = 0
-        self._text_publisher: Optional[Publisher] = None
         self._started_at = 0.0
 
     @property
@@ -161,7 +150,7 @@ class SpeechEventNode:
 
     def start(self) -> None:
         """Advertise, subscribe, serve, and start the health checks."""
-        self._text_publisher = self._transport.advertise(TEXT_TOPIC, String)
+        self._publication.start(self._transport)
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)
         self._transport.serve(SET_ENABLED_SERVICE, SET_ENABLED, self._control.on_set_enabled)
         self._transport.serve(SET_LANGUAGE_SERVICE, SET_LANGUAGE, self._control.on_set_language)
@@ -243,14 +232,14 @@ class SpeechEventNode:
             if speculation.cancelled:
                 return
             speculation.running = True
-        outcome = self._recognize(audio, speculation.recognizer)
+        outcome = self._recognition(audio, speculation.recognizer)
         with self._lock:
             job = self._speculation.finished(speculation, outcome)
             if job is None:
                 if self._speculation.ends_turn(speculation):
                     self._turn.end_early()
                 return
-        self._conclude(job, outcome)
+        self._publication.conclude(job, outcome)
 
     def _submit(self, audio: Audio, more_follows: bool) -> None:
         """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
@@ -264,14 +253,12 @@ class SpeechEventNode:
         self._action.utterance_closed(number, started_at, more_follows)
         job = RecognitionJob(number, started_at, closed_at, audio, recognizer, self._language, seconds)
         speculation = self._speculation.adopt(job)
-        if speculation is not None and speculation.outcome is None:
-            speculation.watchdog = self._watchdog.watch(job)  # its recognition starts now, as it were
-            return
-        if speculation is not None and speculation.outcome is not None:
-            # Recognized already: published on the clock's next turn, not through the worker,
-            # which is idle (a speculation starts only then, and an utterance closing before
-            # this one would have dropped it).
-            self._clock.call_at(closed_at, functools.partial(self._conclude, job, speculation.outcome))
+        if speculation is not None:
+            if speculation.outcome is None:  # still running: its recognition starts now, as it were
+                speculation.watchdog = self._watchdog.watch(job)
+            else:  # on the clock's next turn: the worker is idle (see SpeculationRules.adopt)
+                conclude = functools.partial(self._publication.conclude, job, speculation.outcome)
+                self._clock.call_at(closed_at, conclude)
             return
         for dropped in self._queue.put(job):
             self._statistics.finished(dropped.seconds)
@@ -291,7 +278,7 @@ class SpeechEventNode:
             self._running = job
             watchdog = self._watchdog.watch(job)
         try:
-            self._conclude(job, self._recognize(job.audio, job.recognizer))
+            self._publication.conclude(job, self._recognition(job.audio, job.recognizer))
         finally:
             with self._lock:
                 self._running = None
@@ -302,63 +289,6 @@ class SpeechEventNode:
     def _still_running(self, job: RecognitionJob) -> bool:
         """Under the lock: whether ``job``'s recognition runs now (on the worker, or speculated)."""
         return self._running is job or self._speculation.running_for(job)
-
-    def _recognize(self, audio: Audio, recognizer: Recognizer) -> RecognitionOutcome:
-        """Resample, screen, transcribe (for a closed utterance or a speculation)."""
-        try:
-            speech = resample(audio, self._config.sample_rate, recognizer.sample_rate)
-            discard = self._screen.discard(speech, recognizer.sample_rate)
-            if discard is not None:
-                return RecognitionOutcome(discard=discard)
-            began = self._stopwatch()
-            answer = recognizer.transcribe(speech)
-            return RecognitionOutcome(answer, took=self._stopwatch() - began)
-        # A failed recognition must not stop the node; SystemExit from an engine is a failure like
-        # any other. It is said when the utterance concludes (a cancelled speculation never does).
-        except (Exception, SystemExit) as problem:
-            return RecognitionOutcome(error=problem)
-
-    def _conclude(self, job: RecognitionJob, outcome: RecognitionOutcome) -> None:
-        """Publish what recognition made of a closed utterance, tell the action, store it."""
-        number, recognizer, seconds = job.number, job.recognizer, job.seconds
-        discard, took = outcome.discard, outcome.took
-        text: Optional[str] = None
-        transcript = Transcript("")
-        try:
-            if outcome.error is not None:
-                raise outcome.error
-            if discard is None:
-                self._statistics.transcribed(seconds, took)
-                # An engine that answers with something else than a transcript fails the same way.
-                transcript = checked_transcript(outcome.answer, number)
-        except (Exception, SystemExit):
-            _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
-        finally:
-            self._statistics.finished(seconds)
-        if discard is not None:
-            self._statistics.discarded(discard.value)
-            _LOG.info("utterance %d (%.2f s) is not transcribed: %s", number, seconds, discard.value)
-        else:
-            text = text_to_publish(transcript, self._config)
-            _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
-            if text is not None:
-                self._publish(text)
-                self._statistics.published()
-        self._action.utterance_done(number, None if discard is not None else text or "")
-        if self._store is not None:  # after publishing: storing never delays or loses a transcript
-            self._store.save(
-                number,
-                job.started_at,
-                job.audio,
-                functools.partial(
-                    StoredUtterance,
-                    language=job.language,
-                    engine=type(recognizer).__name__,
-                    transcript=transcript.text,
-                    published=text,
-                    recognition_time=round(took, 6),
-                ),
-            )
 
     # -- runtime control --------------------------------------------------------------------------
 
@@ -399,31 +329,20 @@ class SpeechEventNode:
     # -- health and diagnostics -------------------------------------------------------------------
 
     def _sound_detection_down(self) -> None:
-        self._publish(SOUND_DETECTION_DOWN)
+        self._publication.publish(SOUND_DETECTION_DOWN)
         self._action.sound_detection_down()
 
-    def diagnostic_status(self) -> DiagnosticStatus:
-        """The node's /diagnostics status now."""
+    def _state(self, sound_detection: PublisherStatus) -> NodeState:
         with self._lock:
-            state = NodeState(
+            return NodeState(
                 engine=type(self._recognizer).__name__,
                 language=self._language,
                 enabled=self._enabled,
-                sound_detection=self._health.sound_detection,
+                sound_detection=sound_detection,
                 rejected={reason.value: count for reason, count in self._rejections.counts.items()},
                 clipped=self._rejections.clipped,
                 timed_out=self._watchdog.timed_out,
+                utterances=self._utterances,
+                queued_seconds=self._queue.seconds,
+                dropped=self._queue.dropped,
             )
-        return self._statistics.status(state, [reason.value for reason in Discard])
-
-    def _activity(self) -> Activity:
-        with self._lock:
-            rejected = {reason.value: count for reason, count in self._rejections.counts.items()}
-            clipped, timed_out = self._rejections.clipped, self._watchdog.timed_out
-        return Activity(
-            self._utterances, rejected, clipped, self._queue.seconds, self._queue.dropped, timed_out
-        )
-
-    def _publish(self, text: str) -> None:
-        if self._text_publisher is not None:  # None only before start()
-            self._text_publisher.publish(String(text))

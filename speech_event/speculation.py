@@ -103,7 +103,9 @@ class SpeculationRules:
     def adopt(self, job: RecognitionJob) -> Optional[Speculation]:
         """A closed utterance: the speculation on exactly its audio and engine becomes its
         recognition (its outcome may be there already); None when there is none (a speculation
-        on other audio is dropped: that utterance comes first)."""
+        on other audio is dropped: that utterance comes first). An outcome already there finds
+        the worker idle: a speculation starts only then, and any utterance closing before this
+        one dropped it."""
         speculation = self.current
         if speculation is None or speculation.adopted is not None:
             return None

@@ -43,6 +43,9 @@ class NodeState:
     rejected: Dict[str, int]
     clipped: int = 0
     timed_out: int = 0  # recognitions that ran past recognition_timeout
+    utterances: int = 0  # closed so far
+    queued_seconds: float = 0.0  # of speech waiting for recognition
+    dropped: int = 0  # utterances dropped unrecognized (max_backlog)
 
 
 class NodeStatistics:

@@ -23,6 +23,7 @@ from typing import BinaryIO, Callable, List, Optional, Tuple
 
 import numpy as np
 
+from speech_event.config import SpeechEventConfig
 from speech_event.errors import StorageError
 from speech_event.pipeline.resample import resample
 
@@ -77,6 +78,13 @@ def _private_file(path: Path, flags: int) -> BinaryIO:
 
 def wav_bytes(audio: np.ndarray) -> bytes:
     return np.asarray(np.round(np.clip(audio, -1.0, 1.0) * 32767.0), dtype="<i2").tobytes()
+
+
+def store_for(config: SpeechEventConfig) -> "Optional[UtteranceStore]":
+    """The store audio_storage_dir asks for, or None when storing is off."""
+    if not config.audio_storage_dir:
+        return None
+    return UtteranceStore(config.audio_storage_dir, config.sample_rate, config.audio_storage_max_mb)
 
 
 class UtteranceStore:
