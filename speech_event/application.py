@@ -71,6 +71,7 @@ def build_screen(config: SpeechEventConfig) -> SpeechScreen:
 
 
 def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: SpeechScreen) -> None:
+    """Run the node on ROS until it shuts down, then give recognition SHUTDOWN_GRACE_SECONDS to finish."""
     # Only the ROS entry point needs the ROS adapters (and so rospy).
     from speech_event.adapters.executors import ThreadExecutor
     from speech_event.adapters.ros import (
@@ -109,6 +110,7 @@ def without_remappings(argv: Optional[List[str]]) -> List[str]:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    """The ``speech-event`` command (the node, or export-nemo, export-whisper); returns its exit status."""
     raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
         from speech_event.exporters.nemo import main as export_nemo

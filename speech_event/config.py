@@ -25,6 +25,8 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SpeechEventConfig:
+    """The node's settings: one field per configuration key, with its default (README.md describes each)."""
+
     language: str = "english"
     verbose_mode: bool = False
     rw_model_path: str = ""
@@ -163,18 +165,22 @@ _FORMAT = KeyValueFormat(
 
 
 def parse_config(content: str, source: str = "<config>") -> SpeechEventConfig:
+    """Parse the text of a configuration file; ``source`` names it in a ConfigError."""
     return _FORMAT.parse(content, source)
 
 
 def load_config(path: Union[str, Path]) -> SpeechEventConfig:
+    """Read the configuration file at ``path``; ConfigError names the file, line, key and what is allowed."""
     return _FORMAT.load(path)
 
 
 def apply_overrides(
     base: SpeechEventConfig, overrides: Mapping[str, object], source: str
 ) -> SpeechEventConfig:
+    """``base`` with ``overrides`` (typed values, as a scenario's TOML gives them) checked and applied."""
     return _FORMAT.apply_overrides(base, overrides, source)
 
 
 def format_config(config: SpeechEventConfig) -> str:
+    """The text of a configuration file that ``parse_config`` reads back as ``config``."""
     return _FORMAT.format(config)

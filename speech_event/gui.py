@@ -61,6 +61,8 @@ def status_of(diagnostics: Optional[DiagnosticArray]) -> str:
 
 
 class TranscriptWindow:
+    """The Tk window: the texts published, the node's status, and the presenter's controls."""
+
     def __init__(
         self,
         root: tk.Tk,

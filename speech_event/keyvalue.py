@@ -19,17 +19,21 @@ MAX_FILE_BYTES = 2**20
 
 
 class KeyRule(NamedTuple):
+    """How one key's value is read (``parse`` raises ValueError), and what is allowed (for the error)."""
+
     parse: Callable[[object], object]
     allowed: str
 
 
 def text(value: object) -> str:
+    """A text value as it is; ValueError for anything else."""
     if not isinstance(value, str):
         raise ValueError("is not text")
     return value
 
 
 def boolean(value: object) -> bool:
+    """``true`` or ``false`` in any case (or a bool) as a bool."""
     if isinstance(value, bool):
         return value
     if isinstance(value, str) and value.lower() in ("true", "false"):
@@ -38,6 +42,8 @@ def boolean(value: object) -> bool:
 
 
 def choice(*options: str) -> Callable[[object], object]:
+    """A parser of one of ``options``, in any case; it gives the option in lower case."""
+
     def parse(value: object) -> str:
         if isinstance(value, str) and value.lower() in options:
             return value.lower()
@@ -50,6 +56,8 @@ _NUMBER_PATTERNS = {int: r"[-+]?\d+", float: r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\
 
 
 def number(kind: type, low: float, high: float) -> Callable[[object], object]:
+    """A parser of a ``kind`` (int or float) number from ``low`` to ``high``; no nan, inf or bool."""
+
     def parse(value: object) -> Union[int, float]:
         not_a_number = ValueError("is not " + ("an integer" if kind is int else "a number"))
         if isinstance(value, str):
@@ -72,6 +80,7 @@ def number(kind: type, low: float, high: float) -> Callable[[object], object]:
 
 
 def seconds(low: float, high: float) -> KeyRule:
+    """The rule of a key in seconds, from ``low`` to ``high``."""
     return KeyRule(number(float, low, high), f"a number of seconds from {low} to {high}")
 
 

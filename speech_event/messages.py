@@ -12,6 +12,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class MultiArrayDimension:
+    """std_msgs/MultiArrayDimension: one dimension of a multi-array's layout."""
+
     label: str = ""
     size: int = 0
     stride: int = 0
@@ -19,6 +21,8 @@ class MultiArrayDimension:
 
 @dataclass(frozen=True)
 class MultiArrayLayout:
+    """std_msgs/MultiArrayLayout: a multi-array's dimensions (none for soundDetection's mono audio)."""
+
     dim: Tuple[MultiArrayDimension, ...] = ()
     data_offset: int = 0
 
@@ -50,21 +54,29 @@ def message_type_name(message: object) -> str:
 
 @dataclass(frozen=True)
 class SetEnabledRequest:
+    """The request of speech_event/SetEnabled (srv/SetEnabled.srv): ``status``, true or false."""
+
     status: str = ""
 
 
 @dataclass(frozen=True)
 class SetEnabledResponse:
+    """The response of speech_event/SetEnabled: 1 accepted, 0 rejected."""
+
     response: int = 0  # int8: 1 accepted, 0 rejected
 
 
 @dataclass(frozen=True)
 class SetLanguageRequest:
+    """The request of speech_event/SetLanguage (srv/SetLanguage.srv): ``language``, english or kinyarwanda."""
+
     language: str = ""
 
 
 @dataclass(frozen=True)
 class SetLanguageResponse:
+    """The response of speech_event/SetLanguage: 1 accepted, 0 rejected."""
+
     response: int = 0  # int8: 1 accepted, 0 rejected
 
 
@@ -86,16 +98,22 @@ SET_LANGUAGE = ServiceType("speech_event/SetLanguage", SetLanguageRequest, SetLa
 
 @dataclass(frozen=True)
 class RecogniseSpeechGoal:
+    """speech_event/RecogniseSpeechGoal (action/RecogniseSpeech.action): how long to wait for speech."""
+
     wait: float = 0.0  # float32: seconds to wait for speech to start
 
 
 @dataclass(frozen=True)
 class RecogniseSpeechResult:
+    """speech_event/RecogniseSpeechResult: the text published for the utterance; empty when none."""
+
     transcription: str = ""
 
 
 @dataclass(frozen=True)
 class RecogniseSpeechFeedback:
+    """speech_event/RecogniseSpeechFeedback: progress, 0 to 100."""
+
     progress: int = 0  # int8: 0 to 100
 
 
@@ -119,12 +137,16 @@ RECOGNISE_SPEECH = ActionType(
 
 @dataclass(frozen=True)
 class KeyValue:
+    """diagnostic_msgs/KeyValue: one named value of a diagnostic status."""
+
     key: str
     value: str
 
 
 @dataclass(frozen=True)
 class DiagnosticStatus:
+    """diagnostic_msgs/DiagnosticStatus: a level (OK, WARN, ERROR), a message and key-values."""
+
     OK: ClassVar[int] = 0
     WARN: ClassVar[int] = 1
     ERROR: ClassVar[int] = 2
@@ -138,6 +160,8 @@ class DiagnosticStatus:
 
 @dataclass(frozen=True)
 class DiagnosticArray:
+    """diagnostic_msgs/DiagnosticArray, its header reduced to the stamp."""
+
     _type: ClassVar[str] = "diagnostic_msgs/DiagnosticArray"
     stamp: float  # seconds on the node's clock; the ROS adapter makes it the header's stamp
     status: Tuple[DiagnosticStatus, ...] = ()

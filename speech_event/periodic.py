@@ -9,6 +9,8 @@ _LOG = logging.getLogger("speech_event")
 
 
 class Periodic:
+    """Calls ``callback`` every ``period`` seconds from ``start`` (default: now) until cancelled."""
+
     def __init__(
         self, clock: Clock, period: float, callback: Callable[[], None], start: Optional[float] = None
     ) -> None:

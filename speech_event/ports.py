@@ -32,6 +32,8 @@ class PublisherStatus(enum.Enum):
 
 
 class Publisher(Protocol):
+    """Publishes messages on the topic it was advertised for."""
+
     def publish(self, message: object) -> None: ...
 
 
@@ -55,6 +57,8 @@ class ActionGoal(Protocol):
 
 
 class Transport(Protocol):
+    """Topics, services and actions: what the node needs of ROS (RosTransport, InMemoryBus)."""
+
     def advertise(self, topic: str, message_type: type) -> Publisher: ...
 
     def subscribe(self, topic: str, message_type: type, callback: Callable[[object], None]) -> None: ...
@@ -77,10 +81,14 @@ class Transport(Protocol):
 
 
 class Timer(Protocol):
+    """A callback set on a Clock; ``cancel`` keeps it from running."""
+
     def cancel(self) -> None: ...
 
 
 class Clock(Protocol):
+    """The node's time line (ROS time on the robot) and its timers."""
+
     def now(self) -> float:
         """Seconds on this clock's time line."""
         ...
@@ -91,6 +99,8 @@ class Clock(Protocol):
 
 
 class Cancellable(Protocol):
+    """A job submitted to an Executor."""
+
     def cancel(self) -> None:
         """Do not run the job if it has not started (a started one runs on)."""
         ...

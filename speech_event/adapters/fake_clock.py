@@ -10,6 +10,8 @@ from typing import Callable, List, Tuple
 
 
 class FakeTimer:
+    """A timer of the FakeClock: fires its callback when the clock passes its time, unless cancelled."""
+
     def __init__(self, callback: Callable[[], None]) -> None:
         self.callback = callback
         self.cancelled = False
@@ -19,6 +21,8 @@ class FakeTimer:
 
 
 class FakeClock:
+    """The Clock port for tests and scenario replay: time moves only by ``advance`` and ``advance_to``."""
+
     def __init__(self, start: float = 0.0) -> None:
         self._now = start
         self._sequence = 0

@@ -15,6 +15,8 @@ from speech_event.ports import ActionGoal, PublisherStatus
 
 
 class MemoryPublisher:
+    """One node's publisher on the bus, registered under the node's name; it can leave cleanly or crash."""
+
     def __init__(self, bus: "InMemoryBus", topic: str, node: str) -> None:
         self._bus = bus
         self.topic = topic
@@ -98,6 +100,8 @@ class _ActionServer:
 
 
 class InMemoryBus:
+    """The Transport port in memory, and the clients' side: ``call`` a service, ``send_goal`` to an action."""
+
     def __init__(self) -> None:
         self._subscribers: DefaultDict[str, List[Callable[[object], None]]] = defaultdict(list)
         self._publishers: DefaultDict[str, Dict[str, MemoryPublisher]] = defaultdict(dict)

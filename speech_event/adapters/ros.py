@@ -128,6 +128,8 @@ class RosActionGoal:
 
 
 class RosPublisher:
+    """A rospy.Publisher that takes the messages of speech_event.messages as well as rospy's."""
+
     def __init__(self, publisher: rospy.Publisher) -> None:
         self._publisher = publisher
 
@@ -157,6 +159,8 @@ MASTER_TIMEOUT = 1.0
 
 
 class RosTransport:
+    """The Transport port on rospy: topics, services, and actions through actionlib."""
+
     def __init__(self, master_timeout: float = MASTER_TIMEOUT) -> None:
         """``master_timeout``: the longest a question to the ROS master may take (keep it under the
         health check period, so every check ends in time)."""

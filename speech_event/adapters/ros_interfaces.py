@@ -131,6 +131,7 @@ def ensure_built(writable: Optional[bool] = None) -> Path:
 
 
 def main() -> int:
+    """The build step, ``python -m speech_event.adapters.ros_interfaces``; exit status 2 if it cannot."""
     out = output_directory(os.access(PACKAGE_DIRECTORY, os.W_OK))
     try:
         out.mkdir(parents=True, exist_ok=True)

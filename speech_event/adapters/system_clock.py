@@ -6,6 +6,8 @@ from typing import Callable
 
 
 class SystemTimer:
+    """A timer of the SystemClock: a daemon threading.Timer, ``delay`` seconds from now."""
+
     def __init__(self, delay: float, callback: Callable[[], None]) -> None:
         self._timer = threading.Timer(max(0.0, delay), callback)
         self._timer.daemon = True  # a pending timer never keeps the process alive

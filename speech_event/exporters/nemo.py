@@ -86,10 +86,12 @@ def manifest_for(
 
 
 def vocabulary_lines(tokens: Sequence[str]) -> str:
+    """vocab.txt's text: one ``token id`` a line, the blank (``<blk>``) added last."""
     return "".join(f"{token} {index}\n" for index, token in enumerate([*tokens, "<blk>"]))
 
 
 def export(nemo_path: Path, out_dir: Path, head: str = "rnnt", family: Optional[str] = None) -> Manifest:
+    """Export the .nemo file at ``nemo_path`` to ``out_dir``; its manifest, or ModelError without NeMo."""
     try:
         import nemo.collections.asr as nemo_asr
     except ImportError:
@@ -127,6 +129,7 @@ def export_model(
 
 
 def main(argv: List[str]) -> int:
+    """The ``speech-event export-nemo`` command; returns its exit status."""
     parser = argparse.ArgumentParser(prog="speech-event export-nemo", description=__doc__)
     parser.add_argument("nemo", type=Path, help="the .nemo file of a NeMo ASR model")
     parser.add_argument("out_dir", type=Path, help="the model directory to write")

@@ -43,6 +43,7 @@ def languages_of(multilingual: bool, named: Dict[str, str], language_token: Any)
 
 
 def parse_language(setting: str) -> Tuple[str, str]:
+    """A ``--language LANGUAGE=CODE`` argument as (language, Whisper's language code)."""
     language, _, code = setting.partition("=")
     if not language or not code:
         raise argparse.ArgumentTypeError(f"{setting!r}: write LANGUAGE=CODE, e.g. kinyarwanda=sw")
@@ -188,6 +189,7 @@ def manifest_of(model: Any, tokenizer: Any, named: Dict[str, str]) -> WhisperMan
 
 
 def token_bytes(tokenizer: Any, count: int) -> List[bytes]:
+    """The bytes of token ids 0 to ``count`` - 1; empty for an id the tokenizer does not have."""
     pieces = []
     for token in range(count):
         try:
@@ -198,6 +200,7 @@ def token_bytes(tokenizer: Any, count: int) -> List[bytes]:
 
 
 def export(checkpoint: str, out_dir: Path, named: Dict[str, str]) -> WhisperManifest:
+    """Export a whisper checkpoint to ``out_dir``: the ONNX files, tokens.txt and config.json."""
     try:
         import whisper
         from whisper.tokenizer import get_tokenizer
@@ -223,6 +226,7 @@ def export(checkpoint: str, out_dir: Path, named: Dict[str, str]) -> WhisperMani
 
 
 def main(argv: List[str]) -> int:
+    """The ``speech-event export-whisper`` command; returns its exit status."""
     parser = argparse.ArgumentParser(prog="speech-event export-whisper", description=__doc__)
     parser.add_argument("checkpoint", help="a whisper model name (tiny, base, ...) or checkpoint file (.pt)")
     parser.add_argument("out_dir", type=Path, help="the model directory to write")

@@ -40,6 +40,8 @@ class _Goal:
 
 
 class ListenAction:
+    """Serves the recognise_speech action: one goal at a time, answered with the next utterance's text."""
+
     def __init__(self, clock: Clock, refusal: Callable[[], Optional[str]]) -> None:
         """``refusal`` says why a goal cannot listen now (the text to abort with), or None."""
         self._clock = clock

@@ -141,4 +141,5 @@ def _level(state: NodeState, backlog: int) -> Tuple[int, str]:
 
 
 def diagnostic_array(stamp: float, status: DiagnosticStatus) -> DiagnosticArray:
+    """The /diagnostics message: the node's one status, stamped with the node's clock."""
     return DiagnosticArray(stamp, (status,))

@@ -15,6 +15,8 @@ EngineBuilder = Callable[[str], Recognizer]
 
 
 class LanguageEngines:
+    """The engine of each language, each built once, the first time it is asked for."""
+
     def __init__(self, language: str, recognizer: Recognizer, build: Optional[EngineBuilder] = None) -> None:
         self._engines: Dict[str, Recognizer] = {language: recognizer}
         self._build = build

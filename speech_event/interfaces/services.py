@@ -28,6 +28,8 @@ ACCEPTED, REJECTED = 1, 0
 
 
 class RuntimeControl:
+    """Answers set_enabled and set_language: checks the request, then enables, disables or switches engine."""
+
     def __init__(
         self,
         engines: LanguageEngines,

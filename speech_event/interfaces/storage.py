@@ -50,6 +50,7 @@ class StoredUtterance:
 
 
 def read_index(directory: Path) -> List[StoredUtterance]:
+    """The lines of ``directory``'s index.jsonl, in the order they were written."""
     lines = (directory / INDEX_NAME).read_text(encoding="utf-8").splitlines()
     return [StoredUtterance(**json.loads(line)) for line in lines if line.strip()]
 
@@ -77,6 +78,7 @@ def _private_file(path: Path, flags: int) -> BinaryIO:
 
 
 def wav_bytes(audio: np.ndarray) -> bytes:
+    """Audio in [-1, 1] as 16-bit little-endian PCM samples (clipped to that range)."""
     return np.asarray(np.round(np.clip(audio, -1.0, 1.0) * 32767.0), dtype="<i2").tobytes()
 
 

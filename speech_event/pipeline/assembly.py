@@ -74,6 +74,8 @@ def quiet_cut(audio: np.ndarray, limit: int, sample_rate: int, non_speech: Optio
 
 
 class UtteranceAssembler:
+    """Collects accepted samples into utterances, cut at a quiet point when one reaches its length limit."""
+
     def __init__(
         self, sample_rate: int, max_utterance_length: float, non_speech: Optional[NonSpeech] = None
     ) -> None:

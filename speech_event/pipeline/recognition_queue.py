@@ -33,6 +33,8 @@ class RecognitionOutcome:
 
 @dataclass(frozen=True)
 class RecognitionJob:
+    """A closed utterance waiting for recognition, with the engine and language it goes to."""
+
     number: int
     started_at: float  # when its first block arrived
     closed_at: float
@@ -43,6 +45,8 @@ class RecognitionJob:
 
 
 class RecognitionQueue:
+    """The utterances waiting for recognition, oldest first, at most ``max_seconds`` of audio."""
+
     def __init__(self, max_seconds: float) -> None:
         self._max_seconds = max_seconds
         self._lock = threading.Lock()

@@ -15,6 +15,8 @@ _CLIPPED = "clipped"
 
 
 class RejectionLog:
+    """Counts rejected and clipped messages on ``topic``; warns of each kind at most once per ``interval``."""
+
     def __init__(self, now: Callable[[], float], topic: str, interval: float = 10.0) -> None:
         self._now = now
         self._topic = topic

@@ -18,6 +18,8 @@ from speech_event.pipeline.vad import SileroVad, silero_model_path
 
 
 class Discard(enum.Enum):
+    """Why an utterance is not transcribed; the value names it in /diagnostics."""
+
     TOO_SHORT = "too_short"
     BELOW_VAD_THRESHOLD = "below_vad_threshold"
 
@@ -27,6 +29,8 @@ SpeechProbability = Callable[[np.ndarray], float]
 
 
 class SpeechScreen:
+    """Tells an utterance that is not speech: shorter than ``min_seconds``, or below the VAD threshold."""
+
     def __init__(
         self,
         min_seconds: float,

@@ -36,6 +36,8 @@ def silero_model_path() -> Path:
 
 
 class SileroVad:
+    """Silero VAD's ONNX model on onnxruntime (CPU, one thread): speech probabilities of 16 kHz audio."""
+
     def __init__(self, path: Path) -> None:
         import onnxruntime
 

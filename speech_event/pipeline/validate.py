@@ -19,6 +19,8 @@ from speech_event.messages import Float32MultiArray, message_type_name
 
 
 class Reason(enum.Enum):
+    """Why a message on /soundDetection/signal was rejected; the value names it in /diagnostics."""
+
     EMPTY = "empty"
     NON_FINITE = "nan_or_inf"
     OUT_OF_RANGE = "out_of_range"
@@ -30,12 +32,16 @@ class Reason(enum.Enum):
 
 @dataclass(frozen=True)
 class Rejection:
+    """A rejected message: the reason, and a sentence naming the problem and what is allowed."""
+
     reason: Reason
     detail: str
 
 
 @dataclass(frozen=True)
 class Accepted:
+    """An accepted message's samples, and how many were clipped into [-1, 1]."""
+
     samples: np.ndarray  # mono float32 in [-1, 1]
     clipped: int = 0  # samples that were a hair outside [-1, 1] and were clipped
 

@@ -61,6 +61,7 @@ def whisper(config: SpeechEventConfig) -> Recognizer:
 
 
 def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
+    """The embedded pocketsphinx engine (English only), with the configured grammar or keyword list."""
     from speech_event.recognizers.sphinx import SphinxRecognizer
 
     if config.language != "english":

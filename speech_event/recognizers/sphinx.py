@@ -38,6 +38,8 @@ def phrases_to_jsgf(phrases: List[str], source: str = "<phrases>") -> str:
 
 
 class SphinxRecognizer:
+    """The Recognizer port on pocketsphinx: its English language model, a grammar, or a keyword list."""
+
     def __init__(self, grammar: str = "", keywords: str = "") -> None:
         from pocketsphinx import Decoder  # only when this engine is chosen
 

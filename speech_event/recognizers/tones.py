@@ -30,6 +30,7 @@ _FFT_SIZE = 8192
 
 
 def symbol_frequency(symbol: str) -> float:
+    """The frequency, in Hz, of one symbol's tone."""
     return LOWEST_HZ + STEP_HZ * SYMBOLS.index(symbol)
 
 
@@ -51,6 +52,7 @@ def _symbol_of(tone: np.ndarray, sample_rate: int) -> str:
 
 
 def decode_tones(audio: np.ndarray, sample_rate: int) -> str:
+    """The text tones-code ``audio`` spells; bursts of sound that are no symbol are skipped."""
     frame = max(1, int(_FRAME_SECONDS * sample_rate))
     shortest = _SHORTEST_TONE_SECONDS * sample_rate / frame
     word_gap = _WORD_GAP_THRESHOLD_SECONDS * sample_rate / frame

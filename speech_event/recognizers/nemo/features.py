@@ -15,6 +15,8 @@ from speech_event.recognizers.onnx.mel import mel_filterbank
 
 @dataclass(frozen=True)
 class FeatureSettings:
+    """NeMo's preprocessor settings that matter at inference; the defaults are the robot's models'."""
+
     sample_rate: int = 16000
     window_seconds: float = 0.025
     stride_seconds: float = 0.01

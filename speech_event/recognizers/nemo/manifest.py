@@ -26,6 +26,8 @@ NEMO_FAMILIES = (CONFORMER_TRANSDUCER, PARAKEET)
 
 @dataclass(frozen=True)
 class Manifest:
+    """What config.json of a NeMo model directory says: features, decoding, family, durations."""
+
     features: FeatureSettings
     max_symbols_per_step: int = 10
     decoding: str = RNNT
@@ -35,6 +37,7 @@ class Manifest:
 
 
 def manifest_json(manifest: Manifest) -> Dict[str, Any]:
+    """The config.json document of ``manifest``, with onnx-asr's key names too."""
     settings = manifest.features
     document: Dict[str, Any] = {
         "model_type": manifest.decoding,
@@ -69,6 +72,7 @@ def _checked(manifest: Manifest) -> Manifest:
 
 
 def load_manifest(path: Path) -> Manifest:
+    """Read a model directory's config.json; ModelError says what is missing or wrong."""
     try:
         document = json.loads(path.read_text(encoding="utf-8"))
         settings = FeatureSettings(

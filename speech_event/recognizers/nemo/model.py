@@ -60,6 +60,8 @@ def _audio_inputs(features: np.ndarray) -> Dict[str, np.ndarray]:
 
 
 class TransducerModel:
+    """A transducer's two ONNX files (RNN-T or TDT): the encoder, and the decoder-joint, run a step a time."""
+
     def __init__(self, directory: Path, cuda: bool) -> None:
         encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_JOINT_FILE
         execution_providers = providers(cuda)  # decided once, so a missing CUDA is said once
@@ -112,6 +114,8 @@ class TransducerModel:
 
 
 class CtcModel:
+    """A CTC model's one ONNX file: features in, per-frame log-probabilities out."""
+
     def __init__(self, directory: Path, cuda: bool) -> None:
         path = directory / CTC_FILE
         self._model = _session(path, providers(cuda))

@@ -32,6 +32,7 @@ PAD_MIN_SECONDS = 1.0
 
 
 def padded_as_nemo_does(audio: np.ndarray, sample_rate: int) -> np.ndarray:
+    """``audio`` padded with silence to a second, half before and half after, as NeMo's transcribe does."""
     missing = int(PAD_MIN_SECONDS * sample_rate) - audio.size
     if missing <= 0:
         return audio
@@ -39,6 +40,8 @@ def padded_as_nemo_does(audio: np.ndarray, sample_rate: int) -> np.ndarray:
 
 
 class NemoRecognizer:
+    """The Recognizer port on an exported NeMo model directory (conformer-transducer, parakeet); Stoppable."""
+
     def __init__(self, model_directory: Union[str, Path], cuda: bool = False) -> None:
         directory = exported_directory(model_directory, ".nemo", "export-nemo")
         self._manifest = load_manifest(directory / MANIFEST_FILE)

@@ -23,6 +23,7 @@ def tdt_greedy(
     durations: Sequence[int],
     max_symbols: int,
 ) -> Hypothesis:
+    """The hypothesis for ``frames`` [T', D]; ``durations`` as config.json lists them."""
     found = Hypothesis()
     last, time, on_this_frame = blank, 0, 0
     while time < len(frames):

@@ -15,6 +15,8 @@ _CONTROL = re.compile(r"^<[^<>]+>$")
 
 
 class Vocabulary:
+    """Token ids to text: SentencePiece pieces, the blank last, control tokens silent."""
+
     def __init__(self, pieces: Sequence[str]) -> None:
         self._pieces = list(pieces)
 
@@ -34,6 +36,7 @@ class Vocabulary:
 
 
 def load_vocabulary(path: Path) -> Vocabulary:
+    """Read vocab.txt; ModelError names a line that is not ``token id``, or ids missing."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as problem:

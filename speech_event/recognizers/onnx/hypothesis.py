@@ -14,6 +14,8 @@ import numpy as np
 
 @dataclass
 class Hypothesis:
+    """The tokens a greedy decoding emitted and their summed log-probability; ``confidence`` is its exp."""
+
     tokens: List[int] = field(default_factory=list)
     score: float = 0.0
 
@@ -27,6 +29,7 @@ class Hypothesis:
 
 
 def log_softmax(logits: np.ndarray) -> np.ndarray:
+    """log(softmax(logits)) in float64, shifted by the maximum so it cannot overflow."""
     values = np.asarray(logits, dtype=np.float64)
     shifted = values - values.max()
     result: np.ndarray = shifted - np.log(np.exp(shifted).sum())

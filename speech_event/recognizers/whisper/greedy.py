@@ -18,11 +18,14 @@ Step = Callable[[Sequence[int]], np.ndarray]
 
 @dataclass
 class WhisperResult:
+    """The text tokens greedy decoding sampled, and the no-speech probability (None: no such token)."""
+
     tokens: List[int]  # the sampled text tokens, eot not included
     no_speech_prob: Optional[float]
 
 
 def whisper_greedy(step: Step, prompt: Sequence[int], manifest: WhisperManifest) -> WhisperResult:
+    """Greedy decoding after ``prompt`` by Whisper's rules: the text tokens and the no-speech probability."""
     logits = step(prompt)
     no_speech: Optional[float] = None
     if manifest.no_speech is not None:

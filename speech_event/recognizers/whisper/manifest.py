@@ -23,6 +23,8 @@ WHISPER = "whisper"
 
 @dataclass(frozen=True)
 class WhisperManifest:
+    """What config.json of a Whisper model directory says: mel bands, context, languages, special tokens."""
+
     mel_bands: int
     vocabulary_size: int
     text_context: int  # n_text_ctx: the decoder's positions
@@ -50,6 +52,7 @@ class WhisperManifest:
 
 
 def manifest_json(manifest: WhisperManifest) -> Dict[str, Any]:
+    """The config.json document of ``manifest``."""
     return {
         "family": WHISPER,
         "model_type": WHISPER,
@@ -73,6 +76,7 @@ def _optional_token(document: Dict[str, Any], key: str) -> Optional[int]:
 
 
 def load_whisper_manifest(path: Path) -> WhisperManifest:
+    """Read a Whisper model directory's config.json; ModelError says what is missing or wrong."""
     try:
         document = json.loads(path.read_text(encoding="utf-8"))
         return WhisperManifest(
@@ -99,10 +103,12 @@ def load_whisper_manifest(path: Path) -> WhisperManifest:
 
 
 def token_lines(pieces: Sequence[bytes]) -> str:
+    """tokens.txt's text: each token's bytes in base64, one a line."""
     return "".join(base64.b64encode(piece).decode("ascii") + "\n" for piece in pieces)
 
 
 def load_tokens(path: Path) -> List[bytes]:
+    """Read tokens.txt: each token's bytes, by id; ModelError when it is not such a file."""
     try:
         lines = path.read_text(encoding="ascii").splitlines()
         return [base64.b64decode(line, validate=True) for line in lines]

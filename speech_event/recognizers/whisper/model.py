@@ -32,10 +32,13 @@ EXPORTER = "speech-event export-whisper"
 
 
 def cross_names(layers: int) -> List[str]:
+    """The encoder's outputs and the decoder's inputs: cross_k_i, cross_v_i for each of ``layers`` blocks."""
     return [f"cross_{kind}_{index}" for index in range(layers) for kind in ("k", "v")]
 
 
 class WhisperModel:
+    """encoder.onnx and decoder.onnx of an exported Whisper model, their tensors checked at load."""
+
     def __init__(self, directory: Path, cuda: bool) -> None:
         execution_providers = providers(cuda)
         encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_FILE

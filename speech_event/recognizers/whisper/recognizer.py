@@ -47,6 +47,8 @@ def pieces_at_quiet_points(audio: np.ndarray) -> List[np.ndarray]:
 
 
 class WhisperRecognizer:
+    """The Recognizer port on an exported Whisper model directory, for one language; Stoppable."""
+
     def __init__(self, model_directory: Union[str, Path], language: str, cuda: bool = False) -> None:
         directory = exported_directory(model_directory, ".pt", "export-whisper")
         self._manifest = load_whisper_manifest(directory / MANIFEST_FILE)
