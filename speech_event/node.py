@@ -97,6 +97,7 @@ class SpeechEventNode:
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
         self._turn = TurnTaking(config, clock, self._lock, self._close_utterance, self._maybe_speculate)
         self._speculation = SpeculationRules(config)
+        self.speculations: SpeculationCounts = self._speculation.counts  # how speculation fared
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         self._health = Health(
             config, transport, clock, self._statistics, self._state, self._sound_detection_down
@@ -125,11 +126,6 @@ class SpeechEventNode:
     def dropped_utterances(self) -> int:
         """Utterances dropped unrecognized to keep within max_backlog."""
         return self._queue.dropped
-
-    @property
-    def speculations(self) -> SpeculationCounts:
-        """How speculative recognition fared."""
-        return self._speculation.counts
 
     @property
     def started_at(self) -> float:

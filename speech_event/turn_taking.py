@@ -9,6 +9,7 @@ after the latest block. Every method is called under the node's lock; the timers
 """
 
 import threading
+from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from speech_event.config import SpeechEventConfig
@@ -19,17 +20,15 @@ from speech_event.ports import Clock, Timer
 TIMER_TOLERANCE = 1e-3
 
 
+@dataclass
 class RearmingTimer:
     """Calls ``on_due`` under ``lock`` once the clock reaches ``due()``, which may move later."""
 
-    def __init__(
-        self, clock: Clock, lock: threading.Lock, due: Callable[[], float], on_due: Callable[[], None]
-    ) -> None:
-        self._clock = clock
-        self._lock = lock
-        self._due = due
-        self._on_due = on_due
-        self._timer: Optional[Timer] = None
+    clock: Clock
+    lock: threading.Lock
+    due: Callable[[], float]
+    on_due: Callable[[], None]
+    _timer: Optional[Timer] = field(default=None, init=False)
 
     @property
     def armed(self) -> bool:
@@ -39,7 +38,7 @@ class RearmingTimer:
     def arm(self) -> None:
         """Set the timer for ``due()``, unless it is set already."""
         if self._timer is None:
-            self._timer = self._clock.call_at(max(self._clock.now(), self._due()), self._fire)
+            self._timer = self.clock.call_at(max(self.clock.now(), self.due()), self._fire)
 
     def rearm(self) -> None:
         """Set the timer for ``due()`` now, which may be sooner than it was set for."""
@@ -48,17 +47,17 @@ class RearmingTimer:
 
     def cancel(self) -> None:
         """Unset the timer."""
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
+        timer, self._timer = self._timer, None
+        if timer is not None:
+            timer.cancel()
 
     def _fire(self) -> None:
-        with self._lock:
+        with self.lock:
             self._timer = None
-            if self._clock.now() < self._due() - TIMER_TOLERANCE:
+            if self.clock.now() < self.due() - TIMER_TOLERANCE:
                 self.arm()
                 return
-            self._on_due()
+            self.on_due()
 
 
 class TurnTaking:

@@ -3,6 +3,7 @@
 import logging
 import queue
 import threading
+from dataclasses import dataclass
 from typing import Callable, Optional
 
 from speech_event.ports import Clock
@@ -67,10 +68,10 @@ class ClockExecutor:
         return _ClockJob(self, job, start, finish)
 
 
+@dataclass
 class _ThreadJob:
-    def __init__(self, job: Callable[[], None]) -> None:
-        self.job = job
-        self.cancelled = False
+    job: Callable[[], None]
+    cancelled: bool = False
 
     def cancel(self) -> None:
         self.cancelled = True

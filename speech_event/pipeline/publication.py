@@ -3,6 +3,7 @@ the action's result, the statistics and, when storing is on, the stored record."
 
 import functools
 import logging
+from dataclasses import dataclass, field
 from typing import Optional
 
 from speech_event.config import SpeechEventConfig
@@ -18,21 +19,15 @@ from speech_event.topics import TEXT_TOPIC
 _LOG = logging.getLogger("speech_event")
 
 
+@dataclass
 class Publication:
     """Concludes closed utterances, each once, on whichever thread recognized it."""
 
-    def __init__(
-        self,
-        config: SpeechEventConfig,
-        statistics: NodeStatistics,
-        action: ListenAction,
-        store: Optional[UtteranceStore],
-    ) -> None:
-        self._config = config
-        self._statistics = statistics
-        self._action = action
-        self._store = store
-        self._publisher: Optional[Publisher] = None
+    config: SpeechEventConfig
+    statistics: NodeStatistics
+    action: ListenAction
+    store: Optional[UtteranceStore]
+    _publisher: Optional[Publisher] = field(default=None, init=False)
 
     def start(self, transport: Transport) -> None:
         """Advertise the text topic."""
@@ -53,25 +48,25 @@ class Publication:
             if outcome.error is not None:
                 raise outcome.error
             if discard is None:
-                self._statistics.transcribed(seconds, took)
+                self.statistics.transcribed(seconds, took)
                 # An engine that answers with something else than a transcript fails the same way.
                 transcript = checked_transcript(outcome.answer, number)
         except (Exception, SystemExit):
             _LOG.exception("recognition of utterance %d (%.2f s) failed", number, seconds)
         finally:
-            self._statistics.finished(seconds)
+            self.statistics.finished(seconds)
         if discard is not None:
-            self._statistics.discarded(discard.value)
+            self.statistics.discarded(discard.value)
             _LOG.info("utterance %d (%.2f s) is not transcribed: %s", number, seconds, discard.value)
         else:
-            text = text_to_publish(transcript, self._config)
+            text = text_to_publish(transcript, self.config)
             _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
             if text is not None:
                 self.publish(text)
-                self._statistics.published()
-        self._action.utterance_done(number, None if discard is not None else text or "")
-        if self._store is not None:  # after publishing: storing never delays or loses a transcript
-            self._store.save(
+                self.statistics.published()
+        self.action.utterance_done(number, None if discard is not None else text or "")
+        if self.store is not None:  # after publishing: storing never delays or loses a transcript
+            self.store.save(
                 number,
                 job.started_at,
                 job.audio,
