@@ -145,7 +145,7 @@ class SpeculationRules:
         recognizer = speculation.recognizer
         grammar_mode = isinstance(recognizer, WholePhrases) and recognizer.whole_phrases
         complete = is_complete(text, self._last_text, grammar_mode, self._answers)
-        self._last_text = text
+        self._last_text = text.strip().lower()  # as is_complete compares it
         return complete
 
     def running_for(self, job: RecognitionJob) -> bool:

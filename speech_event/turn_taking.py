@@ -8,6 +8,7 @@ set at the first block, and when it fires early (more blocks came since) set aga
 after the latest block. Every method is called under the node's lock; the timers take it.
 """
 
+import functools
 import threading
 from dataclasses import dataclass, field
 from typing import Callable, Optional
@@ -29,6 +30,9 @@ class RearmingTimer:
     due: Callable[[], float]
     on_due: Callable[[], None]
     _timer: Optional[Timer] = field(default=None, init=False)
+    # Which setting of the timer is current: a timer thread that was already due when the timer
+    # was cancelled (waiting for the lock meanwhile) must then do nothing.
+    _setting: int = field(default=0, init=False)
 
     @property
     def armed(self) -> bool:
@@ -38,7 +42,9 @@ class RearmingTimer:
     def arm(self) -> None:
         """Set the timer for ``due()``, unless it is set already."""
         if self._timer is None:
-            self._timer = self.clock.call_at(max(self.clock.now(), self.due()), self._fire)
+            self._setting += 1
+            fire = functools.partial(self._fire, self._setting)
+            self._timer = self.clock.call_at(max(self.clock.now(), self.due()), fire)
 
     def rearm(self) -> None:
         """Set the timer for ``due()`` now, which may be sooner than it was set for."""
@@ -51,8 +57,10 @@ class RearmingTimer:
         if timer is not None:
             timer.cancel()
 
-    def _fire(self) -> None:
+    def _fire(self, setting: int) -> None:
         with self.lock:
+            if self._timer is None or setting != self._setting:
+                return
             self._timer = None
             if self.clock.now() < self.due() - TIMER_TOLERANCE:
                 self.arm()

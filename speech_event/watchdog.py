@@ -37,7 +37,7 @@ class Watchdog:
             self.timed_out += 1
             stoppable = isinstance(job.recognizer, Stoppable)
             _LOG.error(
-                "recognition of utterance %d (%.2f s) still runs after recognition_timeout %.0f s: %s",
+                "recognition of utterance %d (%.2f s) still runs after recognition_timeout %g s: %s",
                 job.number,
                 job.seconds,
                 self._timeout,

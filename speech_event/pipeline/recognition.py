@@ -2,7 +2,7 @@
 utterance or a speculation). It never raises: a failure is part of the outcome, said when the
 utterance is published (a cancelled speculation never is)."""
 
-from typing import Callable
+from typing import Callable, Optional
 
 from speech_event.pipeline.recognition_queue import RecognitionOutcome
 from speech_event.pipeline.resample import resample
@@ -20,6 +20,7 @@ class Recognition:
 
     def __call__(self, audio: Audio, recognizer: Recognizer) -> RecognitionOutcome:
         """Resample for ``recognizer``, screen, transcribe."""
+        began: Optional[float] = None
         try:
             speech = resample(audio, self._sample_rate, recognizer.sample_rate)
             discard = self._screen.discard(speech, recognizer.sample_rate)
@@ -29,6 +30,7 @@ class Recognition:
             answer = recognizer.transcribe(speech)
             return RecognitionOutcome(answer, took=self._stopwatch() - began)
         # A failed recognition must not stop the node; SystemExit from an engine is a failure like
-        # any other.
+        # any other. Its time counts too: a speculation stopped mid-run wasted it.
         except (Exception, SystemExit) as problem:
-            return RecognitionOutcome(error=problem)
+            took = 0.0 if began is None else self._stopwatch() - began
+            return RecognitionOutcome(error=problem, took=took)

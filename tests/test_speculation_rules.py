@@ -1,0 +1,479 @@
+"""The speculation rules alone (speech_event/speculation.py): Speculation and SpeculationRules."""
+
+import dataclasses
+
+import numpy as np
+
+from speech_event.config import SpeechEventConfig
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.pipeline.screen import Discard
+from speech_event.ports import Recognizer, Stoppable, Transcript, WholePhrases
+from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules, is_complete
+from tests.helpers.fakes import SpyRecognizer
+
+CONFIG = SpeechEventConfig(speculative_recognition=True, complete_answers="yes,no")
+NO_ANSWERS = dataclasses.replace(CONFIG, complete_answers="")
+
+
+class StoppableRecognizer(SpyRecognizer):
+    """An engine that can be stopped; counts the stops."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.stops = 0
+
+    def stop(self) -> None:
+        self.stops += 1
+
+
+class GrammarRecognizer(StoppableRecognizer):
+    """An engine that may be set to whole phrases of a grammar."""
+
+    def __init__(self, whole_phrases: bool) -> None:
+        super().__init__()
+        self._whole_phrases = whole_phrases
+
+    @property
+    def whole_phrases(self) -> bool:
+        return self._whole_phrases
+
+
+class Handle:
+    """The executor's handle of a submitted speculation; counts the cancels."""
+
+    def __init__(self) -> None:
+        self.cancels = 0
+
+    def cancel(self) -> None:
+        self.cancels += 1
+
+
+class Timer:
+    def __init__(self) -> None:
+        self.cancels = 0
+
+    def cancel(self) -> None:
+        self.cancels += 1
+
+
+def _job(samples: int, recognizer: Recognizer, number: int = 1) -> RecognitionJob:
+    return RecognitionJob(
+        number, 0.0, 1.0, np.zeros(samples, dtype=np.float32), recognizer, "english", samples / 16000
+    )
+
+
+def _said(text: str, took: float = 0.25) -> RecognitionOutcome:
+    return RecognitionOutcome(Transcript(text), took=took)
+
+
+def test_the_fakes_have_the_abilities_they_are_named_for() -> None:
+    assert isinstance(StoppableRecognizer(), Stoppable)
+    assert not isinstance(SpyRecognizer(), Stoppable)
+    assert isinstance(GrammarRecognizer(True), WholePhrases)
+    assert not isinstance(StoppableRecognizer(), WholePhrases)
+
+
+# -- may_start and start ----------------------------------------------------------------------------
+
+
+def test_a_stoppable_engine_may_speculate_while_the_worker_is_idle() -> None:
+    assert SpeculationRules(CONFIG).may_start(StoppableRecognizer(), worker_idle=True)
+
+
+def test_an_engine_that_cannot_be_stopped_never_speculates() -> None:
+    assert not SpeculationRules(CONFIG).may_start(SpyRecognizer(), worker_idle=True)
+
+
+def test_no_speculation_while_the_worker_is_busy() -> None:
+    assert not SpeculationRules(CONFIG).may_start(StoppableRecognizer(), worker_idle=False)
+
+
+def test_no_speculation_while_another_one_is_there() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    rules.start(4096, engine)
+    assert not rules.may_start(engine, worker_idle=True)
+
+
+def test_no_speculation_when_speculative_recognition_is_off() -> None:
+    rules = SpeculationRules(dataclasses.replace(CONFIG, speculative_recognition=False))
+    assert not rules.may_start(StoppableRecognizer(), worker_idle=True)
+
+
+def test_start_makes_the_current_speculation_and_counts_it() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    assert rules.current is speculation
+    assert (speculation.samples, speculation.recognizer) == (4096, engine)
+    assert (speculation.running, speculation.cancelled) == (False, False)
+    assert (speculation.handle, speculation.outcome, speculation.adopted, speculation.watchdog) == (
+        None,
+        None,
+        None,
+        None,
+    )
+    assert rules.counts == SpeculationCounts(started=1, used=0, wasted_seconds=0.0)
+
+
+# -- Speculation ----------------------------------------------------------------------------------
+
+
+def test_a_speculation_is_for_exactly_its_audio_and_engine() -> None:
+    engine = StoppableRecognizer()
+    speculation = Speculation(4096, engine)
+    assert speculation.is_for(4096, engine)
+    assert not speculation.is_for(4097, engine)
+    assert not speculation.is_for(4096, StoppableRecognizer())
+
+
+def test_a_cancelled_speculation_is_for_nothing() -> None:
+    engine = StoppableRecognizer()
+    speculation = Speculation(4096, engine)
+    speculation.cancel()
+    assert not speculation.is_for(4096, engine)
+
+
+def test_cancelling_a_speculation_not_yet_run_cancels_its_job_and_stops_no_engine() -> None:
+    engine = StoppableRecognizer()
+    speculation = Speculation(4096, engine)
+    speculation.handle = handle = Handle()
+    speculation.cancel()
+    assert speculation.cancelled
+    assert handle.cancels == 1
+    assert engine.stops == 0
+
+
+def test_cancelling_a_running_speculation_stops_its_engine() -> None:
+    engine = StoppableRecognizer()
+    speculation = Speculation(4096, engine)
+    speculation.handle = handle = Handle()
+    speculation.running = True
+    speculation.cancel()
+    assert handle.cancels == 1
+    assert engine.stops == 1
+
+
+def test_cancelling_a_running_speculation_on_an_engine_that_cannot_stop_lets_it_run() -> None:
+    speculation = Speculation(4096, SpyRecognizer())
+    speculation.running = True
+    speculation.cancel()
+    assert speculation.cancelled
+
+
+# -- drop -----------------------------------------------------------------------------------------
+
+
+def test_drop_with_no_speculation_does_nothing() -> None:
+    rules = SpeculationRules(CONFIG)
+    rules.drop()
+    assert rules.current is None
+    assert rules.counts == SpeculationCounts()
+
+
+def test_drop_cancels_a_running_speculation_and_stops_its_engine() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.handle = handle = Handle()
+    speculation.running = True
+    rules.drop()
+    assert rules.current is None
+    assert speculation.cancelled
+    assert (handle.cancels, engine.stops) == (1, 1)
+    assert rules.counts.wasted_seconds == 0.0  # counted when it ends (finished)
+
+
+def test_drop_of_a_finished_speculation_counts_its_engine_time_as_wasted() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    assert rules.finished(speculation, _said("go", took=0.75)) is None
+    rules.drop()
+    assert rules.current is None
+    assert engine.stops == 0  # it no longer runs
+    assert rules.counts == SpeculationCounts(started=1, used=0, wasted_seconds=0.75)
+
+
+def test_drop_leaves_an_adopted_speculation_alone() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    assert rules.adopt(_job(4096, engine)) is speculation
+    rules.drop()
+    assert rules.current is speculation
+    assert not speculation.cancelled
+    assert engine.stops == 0
+
+
+# -- adopt ----------------------------------------------------------------------------------------
+
+
+def test_adopt_with_no_speculation_is_none() -> None:
+    assert SpeculationRules(CONFIG).adopt(_job(4096, StoppableRecognizer())) is None
+
+
+def test_a_closed_utterance_adopts_the_running_speculation_on_its_audio() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    job = _job(4096, engine)
+    assert rules.adopt(job) is speculation
+    assert speculation.adopted is job
+    assert rules.current is speculation  # still running: it is still the one
+    assert rules.counts == SpeculationCounts(started=1, used=0)
+    assert rules.running_for(job)
+
+
+def test_a_closed_utterance_adopts_a_finished_speculation_and_it_is_used() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    outcome = _said("go left")
+    assert rules.finished(speculation, outcome) is None  # the utterance was still being collected
+    job = _job(4096, engine)
+    assert rules.adopt(job) is speculation
+    assert speculation.outcome is outcome
+    assert rules.current is None
+    assert rules.counts == SpeculationCounts(started=1, used=1)
+    assert not rules.running_for(job)
+
+
+def test_a_closed_utterance_of_other_audio_drops_the_speculation() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.handle = handle = Handle()
+    speculation.running = True
+    assert rules.adopt(_job(8192, engine)) is None
+    assert rules.current is None
+    assert speculation.cancelled
+    assert speculation.adopted is None
+    assert (handle.cancels, engine.stops) == (1, 1)
+
+
+def test_a_closed_utterance_bound_to_another_engine_drops_the_speculation() -> None:
+    rules = SpeculationRules(CONFIG)
+    speculation = rules.start(4096, StoppableRecognizer())
+    assert rules.adopt(_job(4096, StoppableRecognizer())) is None
+    assert rules.current is None
+    assert speculation.cancelled
+
+
+def test_a_finished_speculation_on_other_audio_is_wasted() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    rules.finished(speculation, _said("go", took=0.5))
+    assert rules.adopt(_job(8192, engine)) is None
+    assert rules.counts == SpeculationCounts(started=1, used=0, wasted_seconds=0.5)
+
+
+def test_a_second_closed_utterance_does_not_adopt_an_adopted_speculation() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    first = _job(4096, engine, number=1)
+    rules.adopt(first)
+    assert rules.adopt(_job(4096, engine, number=2)) is None
+    assert speculation.adopted is first
+    assert rules.current is speculation
+    assert not speculation.cancelled
+
+
+# -- finished -------------------------------------------------------------------------------------
+
+
+def test_an_adopted_speculation_that_finishes_gives_its_utterance() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    job = _job(4096, engine)
+    rules.adopt(job)
+    outcome = _said("go left")
+    assert rules.finished(speculation, outcome) is job
+    assert speculation.outcome is outcome
+    assert not speculation.running
+    assert rules.current is None
+    assert rules.counts == SpeculationCounts(started=1, used=1, wasted_seconds=0.0)
+
+
+def test_a_speculation_that_finishes_while_its_utterance_is_collected_keeps_its_outcome() -> None:
+    rules = SpeculationRules(CONFIG)
+    speculation = rules.start(4096, StoppableRecognizer())
+    speculation.running = True
+    outcome = _said("go")
+    assert rules.finished(speculation, outcome) is None
+    assert speculation.outcome is outcome
+    assert not speculation.running
+    assert rules.current is speculation
+    assert rules.counts == SpeculationCounts(started=1)
+
+
+def test_a_cancelled_speculation_that_finishes_is_wasted_engine_time() -> None:
+    rules = SpeculationRules(CONFIG)
+    speculation = rules.start(4096, StoppableRecognizer())
+    speculation.running = True
+    rules.drop()
+    assert rules.finished(speculation, _said("go", took=1.25)) is None
+    assert speculation.outcome is None
+    assert not speculation.running
+    assert rules.counts == SpeculationCounts(started=1, used=0, wasted_seconds=1.25)
+
+
+def test_wasted_engine_time_adds_up() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    for took in (0.25, 0.5):
+        speculation = rules.start(4096, engine)
+        speculation.running = True
+        rules.drop()
+        rules.finished(speculation, _said("go", took=took))
+    assert rules.counts == SpeculationCounts(started=2, used=0, wasted_seconds=0.75)
+
+
+def test_finished_cancels_the_watchdog_of_an_adopted_speculation() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    rules.adopt(_job(4096, engine))
+    speculation.watchdog = watchdog = Timer()
+    rules.finished(speculation, _said("go"))
+    assert watchdog.cancels == 1
+
+
+def test_running_for_is_false_for_another_job_or_a_speculation_not_running() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    job = _job(4096, engine)
+    assert not rules.running_for(job)  # not adopted
+    rules.adopt(job)
+    assert not rules.running_for(job)  # adopted, not started on the worker
+    speculation.running = True
+    assert rules.running_for(job)
+    assert not rules.running_for(_job(4096, engine, number=2))
+
+
+# -- ends_turn ------------------------------------------------------------------------------------
+
+
+def _speculate(rules: SpeculationRules, engine: Recognizer, outcome: RecognitionOutcome) -> bool:
+    """Whether a speculation that ran to its end while its utterance was still being collected
+    ends the turn; then the next block drops it, as in the node."""
+    speculation = rules.start(4096, engine)
+    speculation.running = True
+    assert rules.finished(speculation, outcome) is None
+    ends = rules.ends_turn(speculation)
+    rules.drop()
+    return ends
+
+
+def test_one_of_complete_answers_ends_the_turn_in_any_case_and_spacing() -> None:
+    rules = SpeculationRules(CONFIG)
+    assert _speculate(rules, StoppableRecognizer(), _said(" Yes "))
+
+
+def test_a_text_not_among_complete_answers_does_not_end_the_turn_the_first_time() -> None:
+    rules = SpeculationRules(CONFIG)
+    assert not _speculate(rules, StoppableRecognizer(), _said("go left"))
+
+
+def test_the_same_text_twice_on_one_utterance_ends_the_turn() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("go left"))
+    assert _speculate(rules, engine, _said("go left"))
+
+
+def test_a_different_text_the_second_time_does_not_end_the_turn() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("go"))
+    assert not _speculate(rules, engine, _said("go left"))
+    assert _speculate(rules, engine, _said("go left"))
+
+
+def test_texts_of_the_utterance_before_are_forgotten() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("go left"))
+    rules.new_utterance()
+    assert not _speculate(rules, engine, _said("go left"))
+
+
+def test_the_same_capitalised_text_twice_ends_the_turn() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("Go left."))
+    assert _speculate(rules, engine, _said("Go left."))
+
+
+def test_is_complete_compares_the_previous_text_as_given() -> None:
+    """The cause of the failure above: the previous text is not normalised like the new one."""
+    assert not is_complete("Go left", "Go left", False, frozenset())
+    assert is_complete("Go left", "go left", False, frozenset())
+
+
+def test_an_empty_text_never_ends_the_turn_even_twice_or_in_grammar_mode() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    grammar = GrammarRecognizer(whole_phrases=True)
+    assert not _speculate(rules, grammar, _said("  "))
+    assert not _speculate(rules, grammar, _said("  "))
+
+
+def test_in_grammar_mode_any_text_ends_the_turn() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    assert _speculate(rules, GrammarRecognizer(whole_phrases=True), _said("go to the kitchen"))
+
+
+def test_an_engine_able_to_but_not_set_to_whole_phrases_is_not_in_grammar_mode() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = GrammarRecognizer(whole_phrases=False)
+    assert not _speculate(rules, engine, _said("go to the kitchen"))
+
+
+def test_a_failed_or_discarded_speculation_does_not_end_the_turn_and_resets_the_comparison() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("go left"))
+    failed = RecognitionOutcome(error=RuntimeError("stopped"))
+    assert not _speculate(rules, engine, failed)
+    assert not _speculate(rules, engine, _said("go left"))
+    assert not _speculate(rules, engine, RecognitionOutcome(discard=Discard.TOO_SHORT))
+
+
+def test_a_cancelled_adopted_or_unfinished_speculation_does_not_end_the_turn() -> None:
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    unfinished = rules.start(4096, engine)
+    assert not rules.ends_turn(unfinished)
+    adopted = unfinished
+    adopted.outcome = _said("yes")
+    adopted.adopted = _job(4096, engine)
+    assert not rules.ends_turn(adopted)
+    cancelled = Speculation(4096, engine)
+    cancelled.outcome = _said("yes")
+    cancelled.cancel()
+    assert not rules.ends_turn(cancelled)
+
+
+def test_a_speculation_that_does_not_count_leaves_the_comparison_as_it_was() -> None:
+    rules = SpeculationRules(NO_ANSWERS)
+    engine = StoppableRecognizer()
+    assert not _speculate(rules, engine, _said("go left"))
+    cancelled = Speculation(4096, engine)
+    cancelled.outcome = _said("turn right")
+    cancelled.cancel()
+    assert not rules.ends_turn(cancelled)
+    assert _speculate(rules, engine, _said("go left"))
+
+
+def test_counts_start_at_zero() -> None:
+    assert SpeculationRules(CONFIG).counts == SpeculationCounts(started=0, used=0, wasted_seconds=0.0)
