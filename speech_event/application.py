@@ -48,8 +48,9 @@ def _arguments(argv: List[str]) -> argparse.Namespace:
         "--recognizer",
         choices=sorted(RECOGNIZERS),
         default="auto",
-        help="speech engine (default auto: the NeMo model of the language when its path is set, else "
-        "pocketsphinx for English); 'fake' decodes the tones voice (scenario replay)",
+        help="speech engine (default auto: the model of the family 'model' names when the language's "
+        "path is set, NeMo or Whisper, else pocketsphinx for English); 'fake' decodes the tones voice "
+        "(scenario replay)",
     )
     return parser.parse_args(argv)
 

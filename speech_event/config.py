@@ -1,7 +1,7 @@
 """The node's configuration: the seed's Table 1 keys, the timing keys, and the robot's release keys.
 
 ``config/speech_event_configuration.ini`` holds these defaults; see speech_event/keyvalue.py for
-the file format and README.md for every key. The robot's current release (v1.1) names some keys
+the file format and docs/configuration.md for every key. The robot's current release (v1.1) names some keys
 its own way (``interUtteranceLen``, ``maxUtteranceLen``): those spellings are aliases here, so its
 configuration file loads unchanged.
 """
@@ -25,7 +25,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SpeechEventConfig:
-    """The node's settings: one field per configuration key, with its default (README.md describes each)."""
+    """The node's settings: one field per configuration key, with its default (docs/configuration.md describes each)."""
 
     language: str = "english"
     verbose_mode: bool = False
