@@ -1,5 +1,5 @@
 """Fixtures for the ros env. rospy is imported here unguarded: in this env a missing ROS is a
-failure, never a skip (tests/ros/ensure_ros_packages.sh installs it)."""
+failure, never a skip (tests/ensure_debian_packages.sh installs it)."""
 
 import os
 import subprocess
@@ -12,7 +12,7 @@ import pytest
 import rosgraph
 import rospy
 
-from harness.ros_runner import Processes, free_port
+from harness.processes import Processes, free_port
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.ros import master_answers
 from tests.helpers.paths import ROOT

@@ -42,6 +42,14 @@ def test_catkin_make_install_puts_the_nodes_launch_files_and_library_in_place(tm
         assert installed.read_text().startswith("#!/usr/bin/python3\n"), script
     share = install / "share" / "speech_event"
     assert (share / "launch" / "speech_event_launch_robot.launch").is_file()
+    # every program an installed launch file starts is installed with it
+    launched = {
+        found
+        for launch in (share / "launch").glob("*.launch")
+        for found in re.findall(r'pkg="speech_event" type="([^"]+)"', launch.read_text())
+    }
+    assert "speech_event_scenario_node.py" in launched
+    assert sorted(p for p in launched if not (install / "lib" / "speech_event" / p).is_file()) == []
     assert (share / "config" / "speech_event_configuration.ini").is_file()
     library = install / "lib" / "python3" / "dist-packages"
     assert (library / "speech_event" / "node.py").is_file()
