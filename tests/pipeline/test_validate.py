@@ -1,8 +1,11 @@
 import logging
 from types import SimpleNamespace
+from typing import List
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from fixtures.malformed import malformed_message
 from speech_event.messages import Float32MultiArray, MultiArrayDimension, MultiArrayLayout
@@ -11,6 +14,10 @@ from speech_event.pipeline.validate import Accepted, Reason, Rejection, validate
 
 RATE = 48000
 CAP = 60 * RATE
+
+
+def _message(data: object, dim: object = ()) -> object:
+    return SimpleNamespace(_type="std_msgs/Float32MultiArray", layout=SimpleNamespace(dim=dim), data=data)
 
 
 @pytest.mark.parametrize(
@@ -104,8 +111,62 @@ def test_a_layout_with_one_channel_dimension_is_mono() -> None:
     assert accepted.samples.size == 3
 
 
-def _message(data: object, dim: object = ()) -> object:
-    return SimpleNamespace(_type="std_msgs/Float32MultiArray", layout=SimpleNamespace(dim=dim), data=data)
+UNDER_TWO = float(np.nextafter(np.float32(2.0), np.float32(0.0)))  # the largest float32 below 2
+
+
+@given(st.lists(st.floats(-UNDER_TWO, UNDER_TWO, width=32), min_size=1, max_size=64))
+def test_samples_with_peaks_under_two_are_accepted_clipped_to_plus_minus_one_and_counted(
+    values: List[float],
+) -> None:
+    data = np.array(values, dtype=np.float32)
+    accepted = validate_signal(Float32MultiArray(data=data), CAP)
+    assert isinstance(accepted, Accepted)
+    assert accepted.samples.tolist() == np.clip(data, -1.0, 1.0).tolist()
+    assert accepted.clipped == sum(1 for value in values if abs(value) > 1.0)
+
+
+def test_a_layout_dimension_of_size_zero_is_a_count() -> None:
+    accepted = validate_signal(_message([0.1, -0.2], dim=[SimpleNamespace(size=0)]), CAP)
+    assert isinstance(accepted, Accepted)
+    assert accepted.samples.tolist() == [np.float32(0.1), np.float32(-0.2)]
+
+
+def test_a_message_of_exactly_the_largest_size_is_accepted_and_one_sample_more_is_not() -> None:
+    accepted = validate_signal(Float32MultiArray(data=np.zeros(480, np.float32)), 480)
+    assert isinstance(accepted, Accepted)
+    assert accepted.samples.size == 480
+    assert validate_signal(Float32MultiArray(data=np.zeros(481, np.float32)), 480) == Rejection(
+        Reason.OVERSIZED, "481 samples in one message (allowed: at most 480, set by max_message_length)"
+    )
+
+
+def test_int16_samples_are_judged_by_their_value_so_minus_32768_is_not_taken_for_audio() -> None:
+    # np.abs(int16(-32768)) is -32768: the peak must be taken where it cannot wrap around.
+    message = _message(np.array([-32768, 0, 32767], dtype=np.int16))
+    assert validate_signal(message, CAP) == Rejection(
+        Reason.OUT_OF_RANGE,
+        "peak value 32768 is outside [-1, 1] (allowed: float32 samples in [-1, 1]; peaks below 2 are clipped); "
+        "it looks like int16 PCM published as float: divide by 32768 before publishing",
+    )
+    accepted = validate_signal(_message(np.array([-1, 0, 1], dtype=np.int16)), CAP)
+    assert isinstance(accepted, Accepted)
+    assert accepted.samples.dtype == np.float32
+    assert (accepted.samples.tolist(), accepted.clipped) == ([-1.0, 0.0, 1.0], 0)
+
+
+@pytest.mark.parametrize(
+    ("peak", "hint"),
+    [
+        (255.5, ""),
+        (-256.0, "; it looks like int16 PCM published as float: divide by 32768 before publishing"),
+    ],
+)
+def test_the_int16_hint_starts_at_a_peak_of_256(peak: float, hint: str) -> None:
+    assert validate_signal(Float32MultiArray(data=[0.5, peak]), CAP) == Rejection(
+        Reason.OUT_OF_RANGE,
+        f"peak value {abs(peak):g} is outside [-1, 1] (allowed: float32 samples in [-1, 1]; "
+        f"peaks below 2 are clipped){hint}",
+    )
 
 
 def _generator() -> object:
@@ -160,6 +221,18 @@ def _generator() -> object:
         (
             _message([0.1], dim=[SimpleNamespace(size="2")]),
             "layout dimension size '2' is not a count (allowed: sizes 0 or more)",
+        ),
+        (
+            _message([0.1], dim=[SimpleNamespace(size=True)]),
+            "layout dimension size True is not a count (allowed: sizes 0 or more)",
+        ),
+        (
+            _message([0.1], dim=[SimpleNamespace(label="samples")]),
+            "layout dimension size None is not a count (allowed: sizes 0 or more)",
+        ),
+        (
+            _message([0.1], dim=4),
+            "layout.dim is int, not a list (allowed: a layout with a list of dimensions)",
         ),
     ],
 )
