@@ -152,12 +152,18 @@ def test_down_is_said_before_the_diagnostics_of_the_same_check() -> None:
     assert len(rig.diagnostics) == 2
 
 
-def test_sound_detection_coming_back_ends_the_down_calls() -> None:
+def _down_then_back(back_at: float, until: float) -> Rig:
+    """Checks from time 0 with soundDetection down; it comes back at ``back_at``; run to ``until``."""
     rig = Rig(CONFIG, sound_detection_up=False)
     rig.health.start(0.0)
-    rig.clock.advance_to(7.5)
+    rig.clock.advance_to(back_at)
     rig.bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    rig.clock.advance_to(20.0)
+    rig.clock.advance_to(until)
+    return rig
+
+
+def test_sound_detection_coming_back_ends_the_down_calls() -> None:
+    rig = _down_then_back(7.5, until=20.0)
     assert rig.downs == [5.0]
     assert rig.health.sound_detection is PublisherStatus.CONNECTED
 
@@ -190,11 +196,7 @@ def test_the_diagnostic_array_is_the_status_the_check_found() -> None:
 
 
 def test_the_diagnostics_are_at_error_level_while_sound_detection_is_down() -> None:
-    rig = Rig(CONFIG, sound_detection_up=False)
-    rig.health.start(0.0)
-    rig.clock.advance_to(5.0)
-    rig.bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    rig.clock.advance_to(10.0)
+    rig = _down_then_back(5.0, until=10.0)
     assert rig.levels() == [
         (5.0, DiagnosticStatus.ERROR, "soundDetection is down: no publisher registered"),
         (10.0, DiagnosticStatus.OK, "listening"),

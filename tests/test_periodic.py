@@ -1,7 +1,7 @@
 """Periodic: a callback at start + P, start + 2P, ... that late timers and failing callbacks do not shift."""
 
 import logging
-from typing import Callable, List, Tuple
+from typing import Callable, Dict, List, Tuple
 
 import pytest
 
@@ -30,20 +30,19 @@ class _LateClock:
         self._timers[-1].callback()
 
 
-def test_it_runs_at_multiples_of_the_period_from_the_start_it_is_given() -> None:
+@pytest.mark.parametrize(
+    ("start", "expected"),
+    [
+        pytest.param({"start": 9.5}, [11.5, 13.5, 15.5], id="from_the_start_it_is_given"),
+        pytest.param({}, [12.0, 14.0, 16.0], id="without_a_start_from_now"),
+    ],
+)
+def test_it_runs_at_multiples_of_the_period(start: Dict[str, float], expected: List[float]) -> None:
     clock = FakeClock(10.0)
     times: List[float] = []
-    Periodic(clock, 2.0, lambda: times.append(clock.now()), start=9.5)
+    Periodic(clock, 2.0, lambda: times.append(clock.now()), **start)
     clock.advance_to(16.0)
-    assert times == [11.5, 13.5, 15.5]
-
-
-def test_without_a_start_it_counts_from_now() -> None:
-    clock = FakeClock(10.0)
-    times: List[float] = []
-    Periodic(clock, 2.0, lambda: times.append(clock.now()))
-    clock.advance_to(16.0)
-    assert times == [12.0, 14.0, 16.0]
+    assert times == expected
 
 
 def test_a_late_timer_does_not_delay_the_runs_after_it() -> None:

@@ -1,29 +1,20 @@
 """The speculation rules alone (speech_event/speculation.py): Speculation and SpeculationRules."""
 
 import dataclasses
+from typing import List, NamedTuple, Optional, Tuple
 
 import numpy as np
+import pytest
 
 from speech_event.config import SpeechEventConfig
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.screen import Discard
 from speech_event.ports import Recognizer, Stoppable, Transcript, WholePhrases
 from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules, is_complete
-from tests.helpers.fakes import SpyRecognizer
+from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 CONFIG = SpeechEventConfig(speculative_recognition=True, complete_answers="yes,no")
 NO_ANSWERS = dataclasses.replace(CONFIG, complete_answers="")
-
-
-class StoppableRecognizer(SpyRecognizer):
-    """An engine that can be stopped; counts the stops."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.stops = 0
-
-    def stop(self) -> None:
-        self.stops += 1
 
 
 class GrammarRecognizer(StoppableRecognizer):
@@ -64,6 +55,16 @@ def _job(samples: int, recognizer: Recognizer, number: int = 1) -> RecognitionJo
 
 def _said(text: str, took: float = 0.25) -> RecognitionOutcome:
     return RecognitionOutcome(Transcript(text), took=took)
+
+
+def _speculating(running: bool = True) -> Tuple[SpeculationRules, StoppableRecognizer, Speculation]:
+    """Rules under CONFIG with one speculation started on 4096 samples of a stoppable engine;
+    ``running``: the worker has started it."""
+    rules = SpeculationRules(CONFIG)
+    engine = StoppableRecognizer()
+    speculation = rules.start(4096, engine)
+    speculation.running = running
+    return rules, engine, speculation
 
 
 def test_the_fakes_have_the_abilities_they_are_named_for() -> None:
@@ -172,11 +173,8 @@ def test_drop_with_no_speculation_does_nothing() -> None:
 
 
 def test_drop_cancels_a_running_speculation_and_stops_its_engine() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    rules, engine, speculation = _speculating()
     speculation.handle = handle = Handle()
-    speculation.running = True
     rules.drop()
     assert rules.current is None
     assert speculation.cancelled
@@ -185,10 +183,7 @@ def test_drop_cancels_a_running_speculation_and_stops_its_engine() -> None:
 
 
 def test_drop_of_a_finished_speculation_counts_its_engine_time_as_wasted() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     assert rules.finished(speculation, _said("go", took=0.75)) is None
     rules.drop()
     assert rules.current is None
@@ -197,10 +192,7 @@ def test_drop_of_a_finished_speculation_counts_its_engine_time_as_wasted() -> No
 
 
 def test_drop_leaves_an_adopted_speculation_alone() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     assert rules.adopt(_job(4096, engine)) is speculation
     rules.drop()
     assert rules.current is speculation
@@ -216,10 +208,7 @@ def test_adopt_with_no_speculation_is_none() -> None:
 
 
 def test_a_closed_utterance_adopts_the_running_speculation_on_its_audio() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     job = _job(4096, engine)
     assert rules.adopt(job) is speculation
     assert speculation.adopted is job
@@ -229,9 +218,7 @@ def test_a_closed_utterance_adopts_the_running_speculation_on_its_audio() -> Non
 
 
 def test_a_closed_utterance_adopts_a_finished_speculation_and_it_is_used() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    rules, engine, speculation = _speculating(running=False)
     outcome = _said("go left")
     assert rules.finished(speculation, outcome) is None  # the utterance was still being collected
     job = _job(4096, engine)
@@ -243,11 +230,8 @@ def test_a_closed_utterance_adopts_a_finished_speculation_and_it_is_used() -> No
 
 
 def test_a_closed_utterance_of_other_audio_drops_the_speculation() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    rules, engine, speculation = _speculating()
     speculation.handle = handle = Handle()
-    speculation.running = True
     assert rules.adopt(_job(8192, engine)) is None
     assert rules.current is None
     assert speculation.cancelled
@@ -256,27 +240,21 @@ def test_a_closed_utterance_of_other_audio_drops_the_speculation() -> None:
 
 
 def test_a_closed_utterance_bound_to_another_engine_drops_the_speculation() -> None:
-    rules = SpeculationRules(CONFIG)
-    speculation = rules.start(4096, StoppableRecognizer())
+    rules, _, speculation = _speculating(running=False)
     assert rules.adopt(_job(4096, StoppableRecognizer())) is None
     assert rules.current is None
     assert speculation.cancelled
 
 
 def test_a_finished_speculation_on_other_audio_is_wasted() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    rules, engine, speculation = _speculating(running=False)
     rules.finished(speculation, _said("go", took=0.5))
     assert rules.adopt(_job(8192, engine)) is None
     assert rules.counts == SpeculationCounts(started=1, used=0, wasted_seconds=0.5)
 
 
 def test_a_second_closed_utterance_does_not_adopt_an_adopted_speculation() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     first = _job(4096, engine, number=1)
     rules.adopt(first)
     assert rules.adopt(_job(4096, engine, number=2)) is None
@@ -289,10 +267,7 @@ def test_a_second_closed_utterance_does_not_adopt_an_adopted_speculation() -> No
 
 
 def test_an_adopted_speculation_that_finishes_gives_its_utterance() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     job = _job(4096, engine)
     rules.adopt(job)
     outcome = _said("go left")
@@ -304,9 +279,7 @@ def test_an_adopted_speculation_that_finishes_gives_its_utterance() -> None:
 
 
 def test_a_speculation_that_finishes_while_its_utterance_is_collected_keeps_its_outcome() -> None:
-    rules = SpeculationRules(CONFIG)
-    speculation = rules.start(4096, StoppableRecognizer())
-    speculation.running = True
+    rules, _, speculation = _speculating()
     outcome = _said("go")
     assert rules.finished(speculation, outcome) is None
     assert speculation.outcome is outcome
@@ -316,9 +289,7 @@ def test_a_speculation_that_finishes_while_its_utterance_is_collected_keeps_its_
 
 
 def test_a_cancelled_speculation_that_finishes_is_wasted_engine_time() -> None:
-    rules = SpeculationRules(CONFIG)
-    speculation = rules.start(4096, StoppableRecognizer())
-    speculation.running = True
+    rules, _, speculation = _speculating()
     rules.drop()
     assert rules.finished(speculation, _said("go", took=1.25)) is None
     assert speculation.outcome is None
@@ -338,10 +309,7 @@ def test_wasted_engine_time_adds_up() -> None:
 
 
 def test_finished_cancels_the_watchdog_of_an_adopted_speculation() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
-    speculation.running = True
+    rules, engine, speculation = _speculating()
     rules.adopt(_job(4096, engine))
     speculation.watchdog = watchdog = Timer()
     rules.finished(speculation, _said("go"))
@@ -349,9 +317,7 @@ def test_finished_cancels_the_watchdog_of_an_adopted_speculation() -> None:
 
 
 def test_running_for_is_false_for_another_job_or_a_speculation_not_running() -> None:
-    rules = SpeculationRules(CONFIG)
-    engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    rules, engine, speculation = _speculating(running=False)
     job = _job(4096, engine)
     assert not rules.running_for(job)  # not adopted
     rules.adopt(job)
@@ -375,29 +341,51 @@ def _speculate(rules: SpeculationRules, engine: Recognizer, outcome: Recognition
     return ends
 
 
-def test_one_of_complete_answers_ends_the_turn_in_any_case_and_spacing() -> None:
-    rules = SpeculationRules(CONFIG)
-    assert _speculate(rules, StoppableRecognizer(), _said(" Yes "))
+class Said(NamedTuple):
+    """The texts of the speculations on one utterance, each with whether it ends the turn; with
+    ``whole_phrases`` (not None) the engine is one of a grammar, set to whole phrases or not."""
+
+    config: SpeechEventConfig
+    whole_phrases: Optional[bool]
+    texts: List[Tuple[str, bool]]
 
 
-def test_a_text_not_among_complete_answers_does_not_end_the_turn_the_first_time() -> None:
-    rules = SpeculationRules(CONFIG)
-    assert not _speculate(rules, StoppableRecognizer(), _said("go left"))
+ENDS_TURN = {
+    "one_of_complete_answers_ends_the_turn_in_any_case_and_spacing": Said(CONFIG, None, [(" Yes ", True)]),
+    "a_text_not_among_complete_answers_does_not_end_the_turn_the_first_time": Said(
+        CONFIG, None, [("go left", False)]
+    ),
+    "the_same_text_twice_on_one_utterance_ends_the_turn": Said(
+        NO_ANSWERS, None, [("go left", False), ("go left", True)]
+    ),
+    "a_different_text_the_second_time_does_not_end_the_turn": Said(
+        NO_ANSWERS, None, [("go", False), ("go left", False), ("go left", True)]
+    ),
+    "the_same_capitalised_text_twice_ends_the_turn": Said(
+        NO_ANSWERS, None, [("Go left.", False), ("Go left.", True)]
+    ),
+    "an_empty_text_never_ends_the_turn_even_twice_or_in_grammar_mode": Said(
+        NO_ANSWERS, True, [("  ", False), ("  ", False)]
+    ),
+    "in_grammar_mode_any_text_ends_the_turn": Said(NO_ANSWERS, True, [("go to the kitchen", True)]),
+    "an_engine_able_to_but_not_set_to_whole_phrases_is_not_in_grammar_mode": Said(
+        NO_ANSWERS, False, [("go to the kitchen", False)]
+    ),
+}
 
 
-def test_the_same_text_twice_on_one_utterance_ends_the_turn() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    engine = StoppableRecognizer()
-    assert not _speculate(rules, engine, _said("go left"))
-    assert _speculate(rules, engine, _said("go left"))
+@pytest.mark.parametrize("said", list(ENDS_TURN.values()), ids=list(ENDS_TURN))
+def test_whether_a_speculations_text_ends_the_turn(said: Said) -> None:
+    rules = SpeculationRules(said.config)
+    engine = StoppableRecognizer() if said.whole_phrases is None else GrammarRecognizer(said.whole_phrases)
+    assert [(text, _speculate(rules, engine, _said(text))) for text, _ in said.texts] == said.texts
 
 
-def test_a_different_text_the_second_time_does_not_end_the_turn() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    engine = StoppableRecognizer()
-    assert not _speculate(rules, engine, _said("go"))
-    assert not _speculate(rules, engine, _said("go left"))
-    assert _speculate(rules, engine, _said("go left"))
+def test_is_complete_compares_the_previous_text_as_given() -> None:
+    """The cause of the failure the_same_capitalised_text_twice_ends_the_turn (above) found: the
+    previous text is not normalised like the new one."""
+    assert not is_complete("Go left", "Go left", False, frozenset())
+    assert is_complete("Go left", "go left", False, frozenset())
 
 
 def test_texts_of_the_utterance_before_are_forgotten() -> None:
@@ -406,37 +394,6 @@ def test_texts_of_the_utterance_before_are_forgotten() -> None:
     assert not _speculate(rules, engine, _said("go left"))
     rules.new_utterance()
     assert not _speculate(rules, engine, _said("go left"))
-
-
-def test_the_same_capitalised_text_twice_ends_the_turn() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    engine = StoppableRecognizer()
-    assert not _speculate(rules, engine, _said("Go left."))
-    assert _speculate(rules, engine, _said("Go left."))
-
-
-def test_is_complete_compares_the_previous_text_as_given() -> None:
-    """The cause of the failure above: the previous text is not normalised like the new one."""
-    assert not is_complete("Go left", "Go left", False, frozenset())
-    assert is_complete("Go left", "go left", False, frozenset())
-
-
-def test_an_empty_text_never_ends_the_turn_even_twice_or_in_grammar_mode() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    grammar = GrammarRecognizer(whole_phrases=True)
-    assert not _speculate(rules, grammar, _said("  "))
-    assert not _speculate(rules, grammar, _said("  "))
-
-
-def test_in_grammar_mode_any_text_ends_the_turn() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    assert _speculate(rules, GrammarRecognizer(whole_phrases=True), _said("go to the kitchen"))
-
-
-def test_an_engine_able_to_but_not_set_to_whole_phrases_is_not_in_grammar_mode() -> None:
-    rules = SpeculationRules(NO_ANSWERS)
-    engine = GrammarRecognizer(whole_phrases=False)
-    assert not _speculate(rules, engine, _said("go to the kitchen"))
 
 
 def test_a_failed_or_discarded_speculation_does_not_end_the_turn_and_resets_the_comparison() -> None:

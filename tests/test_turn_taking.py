@@ -5,7 +5,9 @@ Times are binary fractions, so every time the clock reaches is exact.
 
 import dataclasses
 import threading
-from typing import Callable, List, Tuple
+from typing import Callable, List, NamedTuple, Sequence, Tuple, Union
+
+import pytest
 
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.config import SpeechEventConfig
@@ -39,6 +41,19 @@ def _timer(when: float, start: float = 0.0) -> Tuple[FakeClock, Due, RearmingTim
     return clock, due, RearmingTimer(clock, lock, due, due.on_due)
 
 
+TimerStep = Union[float, Callable[[RearmingTimer], None]]
+ARM, REARM, CANCEL = RearmingTimer.arm, RearmingTimer.rearm, RearmingTimer.cancel
+
+
+def _operate(due: Due, timer: RearmingTimer, steps: Sequence[TimerStep]) -> None:
+    """Each step: the due time moves to that time (a float), or an operation on the timer."""
+    for step in steps:
+        if isinstance(step, float):
+            due.when = step
+        else:
+            step(timer)
+
+
 def test_the_timer_fires_once_at_its_due_time() -> None:
     clock, due, timer = _timer(2.0)
     timer.arm()
@@ -59,32 +74,43 @@ def test_the_timer_is_armed_until_it_fires() -> None:
     assert not timer.armed
 
 
-def test_arming_an_armed_timer_sets_no_second_timer() -> None:
+@pytest.mark.parametrize(
+    ("steps", "fired"),
+    [
+        pytest.param([ARM, ARM], [2.0], id="arming_an_armed_timer_sets_no_second_timer"),
+        pytest.param(
+            [ARM, 1.0, ARM], [2.0], id="arming_an_armed_timer_keeps_its_time_even_if_due_moved_sooner"
+        ),
+        pytest.param([ARM, 0.5, REARM], [0.5], id="rearm_makes_the_timer_sooner"),
+        pytest.param([REARM], [2.0], id="rearm_of_an_unarmed_timer_arms_it"),
+        pytest.param([ARM, CANCEL, ARM], [2.0], id="a_cancelled_timer_can_be_armed_again"),
+        # the timer still fires at 2.0, 0.9 ms early
+        pytest.param([ARM, 2.0009], [2.0], id="a_timer_firing_less_than_the_tolerance_early_has_come_due"),
+    ],
+)
+def test_the_timer_due_at_2_fires_once(steps: List[TimerStep], fired: List[float]) -> None:
     clock, due, timer = _timer(2.0)
-    timer.arm()
-    timer.arm()
+    _operate(due, timer, steps)
     clock.advance_to(10.0)
-    assert due.fired == [2.0]
+    assert due.fired == fired
 
 
-def test_arming_an_armed_timer_keeps_its_time_even_if_due_moved_sooner() -> None:
+@pytest.mark.parametrize(
+    "later",
+    [
+        pytest.param(3.5, id="a_due_time_moved_later_rearms_the_timer_for_it"),
+        pytest.param(2.0011, id="a_timer_firing_more_than_the_tolerance_early_is_set_again"),
+    ],
+)
+def test_a_due_time_moved_later_sets_the_timer_again(later: float) -> None:
     clock, due, timer = _timer(2.0)
     timer.arm()
-    due.when = 1.0
-    timer.arm()
-    clock.advance_to(10.0)
-    assert due.fired == [2.0]
-
-
-def test_a_due_time_moved_later_rearms_the_timer_for_it() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.arm()
-    due.when = 3.5
+    due.when = later
     clock.advance_to(2.0)
     assert due.fired == []
     assert timer.armed
     clock.advance_to(10.0)
-    assert due.fired == [3.5]
+    assert due.fired == [later]
 
 
 def test_a_due_time_moved_later_twice_fires_only_at_the_last_one() -> None:
@@ -97,46 +123,20 @@ def test_a_due_time_moved_later_twice_fires_only_at_the_last_one() -> None:
     assert due.fired == [3.0]
 
 
-def test_rearm_makes_the_timer_sooner() -> None:
+@pytest.mark.parametrize(
+    "steps",
+    [
+        pytest.param([ARM, CANCEL], id="cancel_stops_the_timer"),
+        pytest.param([CANCEL], id="cancel_of_an_unarmed_timer_does_nothing"),
+    ],
+)
+def test_a_cancelled_timer_is_unarmed_and_never_fires(steps: List[TimerStep]) -> None:
     clock, due, timer = _timer(2.0)
-    timer.arm()
-    due.when = 0.5
-    timer.rearm()
-    clock.advance_to(10.0)
-    assert due.fired == [0.5]
-
-
-def test_rearm_of_an_unarmed_timer_arms_it() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.rearm()
-    clock.advance_to(10.0)
-    assert due.fired == [2.0]
-
-
-def test_cancel_stops_the_timer() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.arm()
-    timer.cancel()
+    _operate(due, timer, steps)
     assert not timer.armed
     clock.advance_to(10.0)
     assert due.fired == []
-
-
-def test_cancel_of_an_unarmed_timer_does_nothing() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.cancel()
-    clock.advance_to(10.0)
-    assert due.fired == []
     assert not timer.armed
-
-
-def test_a_cancelled_timer_can_be_armed_again() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.arm()
-    timer.cancel()
-    timer.arm()
-    clock.advance_to(10.0)
-    assert due.fired == [2.0]
 
 
 def test_a_due_time_already_past_fires_at_once() -> None:
@@ -155,25 +155,6 @@ def test_the_callback_runs_under_the_lock() -> None:
 
 def test_the_tolerance_is_one_millisecond() -> None:
     assert TIMER_TOLERANCE == 1e-3
-
-
-def test_a_timer_firing_less_than_the_tolerance_early_has_come_due() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.arm()
-    due.when = 2.0009  # the timer still fires at 2.0, 0.9 ms early
-    clock.advance_to(10.0)
-    assert due.fired == [2.0]
-
-
-def test_a_timer_firing_more_than_the_tolerance_early_is_set_again() -> None:
-    clock, due, timer = _timer(2.0)
-    timer.arm()
-    due.when = 2.0011
-    clock.advance_to(2.0)
-    assert due.fired == []
-    assert timer.armed
-    clock.advance_to(10.0)
-    assert due.fired == [2.0011]
 
 
 class ManualClock:
@@ -212,6 +193,7 @@ def test_a_callback_of_a_timer_cancelled_while_it_waited_for_the_lock_does_nothi
 
 CONFIG = SpeechEventConfig(speech_pause_period=1.5, speculation_gap=0.25, early_pause=0.0)
 EARLY = dataclasses.replace(CONFIG, early_pause=0.5)
+NO_SPECULATION = dataclasses.replace(CONFIG, speculative_recognition=False)
 
 
 class Turn:
@@ -240,24 +222,33 @@ class Turn:
         self.clock.advance_to(when)
         self.turn.heard(when)
 
+    def play(self, steps: Sequence[Tuple[float, str]]) -> None:
+        """At each time, a block arrives or the node calls that method of TurnTaking (end_early ...)."""
+        for when, what in steps:
+            if what == "block":
+                self.block(when)
+            else:
+                self.clock.advance_to(when)
+                getattr(self.turn, what)()
 
-def test_one_block_ends_the_utterance_speech_pause_period_after_it() -> None:
+
+@pytest.mark.parametrize(
+    ("blocks", "before", "end"),
+    [
+        pytest.param([0.0], 1.25, 1.5, id="one_block_ends_the_utterance_speech_pause_period_after_it"),
+        pytest.param([0.0, 0.5, 1.0, 1.25], 2.5, 2.75, id="after_the_last_of_several_blocks"),
+    ],
+)
+def test_the_pause_ends_speech_pause_period_after_the_last_block(
+    blocks: List[float], before: float, end: float
+) -> None:
     turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.clock.advance_to(1.25)
-    assert turn.ends == []
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [1.5]
-
-
-def test_the_pause_ends_speech_pause_period_after_the_last_block() -> None:
-    turn = Turn(CONFIG)
-    for when in (0.0, 0.5, 1.0, 1.25):
+    for when in blocks:
         turn.block(when)
-    turn.clock.advance_to(2.5)
+    turn.clock.advance_to(before)
     assert turn.ends == []
     turn.clock.advance_to(10.0)
-    assert turn.ends == [2.75]
+    assert turn.ends == [end]
 
 
 def test_heard_records_the_last_arrival() -> None:
@@ -276,61 +267,68 @@ def test_the_pause_and_the_gap_call_back_under_the_lock() -> None:
     assert turn.held_lock == [True, True]
 
 
-def test_each_utterance_has_its_own_pause() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.block(2.0)
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [1.5, 3.5]
+class Run(NamedTuple):
+    """What happens on the turn (see Turn.play); the times its pauses ended and its gaps passed by 10 s."""
+
+    config: SpeechEventConfig
+    steps: List[Tuple[float, str]]
+    ends: List[float]
+    gaps: List[float]
 
 
-def test_a_complete_answer_ends_the_turn_early_pause_after_the_last_block() -> None:
-    turn = Turn(EARLY)
-    turn.block(0.0)
-    turn.block(0.125)
-    turn.clock.advance_to(0.375)  # the speculation, from the gap at 0.375, says a complete answer
-    turn.turn.end_early()
+RUNS = {
+    "each_utterance_has_its_own_pause": Run(
+        CONFIG, [(0.0, "block"), (2.0, "block")], [1.5, 3.5], [0.25, 2.25]
+    ),
+    # the speculation, from the gap at 0.375, says a complete answer
+    "a_complete_answer_ends_the_turn_early_pause_after_the_last_block": Run(
+        EARLY, [(0.0, "block"), (0.125, "block"), (0.375, "end_early")], [0.625], [0.375]
+    ),
+    "with_early_pause_0_a_complete_answer_changes_nothing": Run(
+        CONFIG, [(0.0, "block"), (0.25, "end_early")], [1.5], [0.25]
+    ),
+    "a_block_after_the_complete_answer_brings_back_the_whole_pause": Run(
+        EARLY, [(0.0, "block"), (0.25, "end_early"), (0.375, "block")], [1.875], [0.25, 0.625]
+    ),
+    "the_utterance_after_an_early_end_waits_the_whole_pause": Run(
+        EARLY, [(0.0, "block"), (0.25, "end_early"), (2.0, "block")], [0.5, 3.5], [0.25, 2.25]
+    ),
+    "the_gap_passes_once_per_pause": Run(CONFIG, [(0.0, "block"), (0.5, "block")], [2.0], [0.25, 0.75]),
+    "without_speculative_recognition_the_gap_sets_no_timer": Run(NO_SPECULATION, [(0.0, "block")], [1.5], []),
+    "drop_turn_waits_for_no_pause_and_leaves_the_gap_timer_set": Run(
+        CONFIG, [(0.0, "block"), (0.0, "drop_turn")], [], [0.25]
+    ),
+    "the_next_block_after_drop_turn_starts_a_whole_pause": Run(
+        CONFIG, [(0.0, "block"), (0.0, "drop_turn"), (1.0, "block")], [2.5], [0.25, 1.25]
+    ),
+    "stop_unsets_both_timers": Run(CONFIG, [(0.0, "block"), (0.0, "stop")], [], []),
+}
+
+
+@pytest.mark.parametrize("run", list(RUNS.values()), ids=list(RUNS))
+def test_the_pauses_that_end_and_the_gaps_that_pass(run: Run) -> None:
+    turn = Turn(run.config)
+    turn.play(run.steps)
     turn.clock.advance_to(10.0)
-    assert turn.ends == [0.625]
+    assert turn.ends == run.ends
+    assert turn.gaps == run.gaps
 
 
 def test_a_complete_answer_found_after_early_pause_ends_the_turn_at_once() -> None:
     turn = Turn(EARLY)
-    turn.block(0.0)
-    turn.clock.advance_to(0.75)
-    turn.turn.end_early()
+    turn.play([(0.0, "block"), (0.75, "end_early")])
     turn.clock.advance(0.0)
     assert turn.ends == [0.75]
 
 
-def test_with_early_pause_0_a_complete_answer_changes_nothing() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.clock.advance_to(0.25)
-    turn.turn.end_early()
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [1.5]
-
-
-def test_a_block_after_the_complete_answer_brings_back_the_whole_pause() -> None:
+def test_drop_turn_forgets_an_early_end() -> None:
     turn = Turn(EARLY)
-    turn.block(0.0)
-    turn.clock.advance_to(0.25)
-    turn.turn.end_early()
-    turn.block(0.375)
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [1.875]
-
-
-def test_the_utterance_after_an_early_end_waits_the_whole_pause() -> None:
-    turn = Turn(EARLY)
-    turn.block(0.0)
-    turn.clock.advance_to(0.25)
-    turn.turn.end_early()
+    turn.play([(0.0, "block"), (0.25, "end_early"), (0.25, "drop_turn")])
     turn.clock.advance_to(1.0)
+    assert turn.ends == []
     turn.block(2.0)
     turn.clock.advance_to(10.0)
-    assert turn.ends == [0.5, 3.5]
+    assert turn.ends == [3.5]
 
 
 def test_the_gap_passes_speculation_gap_after_the_last_block() -> None:
@@ -344,83 +342,23 @@ def test_the_gap_passes_speculation_gap_after_the_last_block() -> None:
     assert turn.gap_passed_at_gap == [True]
 
 
-def test_the_gap_passes_once_per_pause() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.block(0.5)
-    turn.clock.advance_to(10.0)
-    assert turn.gaps == [0.25, 0.75]
-
-
-def test_without_speculative_recognition_the_gap_sets_no_timer() -> None:
-    turn = Turn(dataclasses.replace(CONFIG, speculative_recognition=False))
-    turn.block(0.0)
-    turn.clock.advance_to(10.0)
-    assert turn.gaps == []
-    assert turn.ends == [1.5]
-
-
-def test_gap_passed_is_false_while_the_gap_timer_waits() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.block(0.125)
-    turn.clock.advance_to(0.3125)  # the first gap timer fired at 0.25 and was set again for 0.375
+@pytest.mark.parametrize(
+    ("config", "blocks", "before", "at"),
+    [
+        # the first gap timer fired at 0.25 and was set again for 0.375
+        pytest.param(CONFIG, [0.0, 0.125], 0.3125, 0.375, id="gap_passed_is_false_while_the_gap_timer_waits"),
+        # no timer: the clock alone
+        pytest.param(
+            NO_SPECULATION, [0.0], 0.2489, 0.2491, id="gap_passed_comes_exactly_at_the_gap_less_the_tolerance"
+        ),
+    ],
+)
+def test_gap_passed_comes_at_the_gap(
+    config: SpeechEventConfig, blocks: List[float], before: float, at: float
+) -> None:
+    turn = Turn(config)
+    turn.play([(when, "block") for when in blocks])
+    turn.clock.advance_to(before)
     assert not turn.turn.gap_passed()
-    turn.clock.advance_to(0.375)
+    turn.clock.advance_to(at)
     assert turn.turn.gap_passed()
-
-
-def test_gap_passed_comes_exactly_at_the_gap_less_the_tolerance() -> None:
-    turn = Turn(dataclasses.replace(CONFIG, speculative_recognition=False))  # no timer: the clock alone
-    turn.block(0.0)
-    turn.clock.advance_to(0.2489)
-    assert not turn.turn.gap_passed()
-    turn.clock.advance_to(0.2491)
-    assert turn.turn.gap_passed()
-
-
-def test_drop_turn_waits_for_no_pause() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.turn.drop_turn()
-    turn.clock.advance_to(10.0)
-    assert turn.ends == []
-
-
-def test_drop_turn_leaves_the_gap_timer_set() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.turn.drop_turn()
-    turn.clock.advance_to(10.0)
-    assert turn.gaps == [0.25]
-
-
-def test_drop_turn_forgets_an_early_end() -> None:
-    turn = Turn(EARLY)
-    turn.block(0.0)
-    turn.clock.advance_to(0.25)
-    turn.turn.end_early()
-    turn.turn.drop_turn()
-    turn.clock.advance_to(1.0)
-    assert turn.ends == []
-    turn.block(2.0)
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [3.5]
-
-
-def test_the_next_block_after_drop_turn_starts_a_whole_pause() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.turn.drop_turn()
-    turn.block(1.0)
-    turn.clock.advance_to(10.0)
-    assert turn.ends == [2.5]
-
-
-def test_stop_unsets_both_timers() -> None:
-    turn = Turn(CONFIG)
-    turn.block(0.0)
-    turn.turn.stop()
-    turn.clock.advance_to(10.0)
-    assert turn.ends == []
-    assert turn.gaps == []

@@ -11,16 +11,7 @@ from speech_event.adapters.fake_clock import FakeClock
 from speech_event.pipeline.recognition_queue import RecognitionJob
 from speech_event.ports import Recognizer
 from speech_event.watchdog import Watchdog
-from tests.helpers.fakes import SpyRecognizer
-
-
-class StoppableRecognizer(SpyRecognizer):
-    def __init__(self) -> None:
-        super().__init__()
-        self.stops = 0
-
-    def stop(self) -> None:
-        self.stops += 1
+from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 
 class Running:

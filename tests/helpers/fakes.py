@@ -24,6 +24,17 @@ class SpyRecognizer:
         return self.answer
 
 
+class StoppableRecognizer(SpyRecognizer):
+    """An engine that can be stopped; counts the stops."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.stops = 0
+
+    def stop(self) -> None:
+        self.stops += 1
+
+
 class GatedRecognizer(SpyRecognizer):
     """Blocks in transcribe until the test opens the gate: a recognition that takes long."""
 

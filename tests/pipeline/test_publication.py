@@ -27,6 +27,9 @@ CONFIG = SpeechEventConfig(sample_rate=16000)
 UNRECOGNIZED = dataclasses.replace(CONFIG, publish_unrecognized=True)
 
 
+Describe = Callable[..., StoredUtterance]
+
+
 class RecordingStore(UtteranceStore):
     """Keeps what it is handed, and what had been published on the text topic by then."""
 
@@ -34,13 +37,7 @@ class RecordingStore(UtteranceStore):
         self.published: Callable[[], List[str]] = list
         self.saved: List[Tuple[int, float, int, StoredUtterance, List[str]]] = []
 
-    def save(
-        self,
-        number: int,
-        started_at: float,
-        audio: np.ndarray,
-        describe: Callable[..., StoredUtterance],
-    ) -> None:
+    def save(self, number: int, started_at: float, audio: np.ndarray, describe: Describe) -> None:
         line = describe(file="utterance.wav", start_time=started_at, duration=audio.size / 16000)
         self.saved.append((number, started_at, audio.size, line, self.published()))
 
@@ -90,6 +87,20 @@ def _said(text: str, confidence: Optional[float] = None, took: float = 0.25) -> 
 
 def _messages(caplog: pytest.LogCaptureFixture) -> List[Tuple[int, str]]:
     return [(record.levelno, record.getMessage()) for record in caplog.records]
+
+
+def _stored(file: str, transcript: str, recognition_time: float) -> StoredUtterance:
+    """The index line of the utterance Rig.conclude closes, published as "go left"."""
+    return StoredUtterance(
+        file=file,
+        start_time=1.0,
+        duration=0.5,
+        language="english",
+        engine="SpyRecognizer",
+        transcript=transcript,
+        published="go left",
+        recognition_time=recognition_time,
+    )
 
 
 # -- publish --------------------------------------------------------------------------------------
@@ -281,16 +292,7 @@ def test_storage_is_handed_the_utterance_after_it_is_published() -> None:
             5,
             1.0,
             8000,
-            StoredUtterance(
-                file="utterance.wav",
-                start_time=1.0,
-                duration=0.5,
-                language="english",
-                engine="SpyRecognizer",
-                transcript=" go left ",
-                published="go left",
-                recognition_time=0.123457,
-            ),
+            _stored("utterance.wav", " go left ", recognition_time=0.123457),
             ["go left"],  # what the text topic had when the store was called
         )
     ]
@@ -322,15 +324,6 @@ def test_the_real_store_writes_the_index_line(tmp_path: Path) -> None:
         store.close()
     assert rig.published == ["go left"]
     assert read_index(tmp_path) == [
-        StoredUtterance(
-            file="19700101-000001.000_000002.wav",
-            start_time=1.0,
-            duration=0.5,
-            language="english",
-            engine="SpyRecognizer",
-            transcript="go left",
-            published="go left",
-            recognition_time=0.25,
-        )
+        _stored("19700101-000001.000_000002.wav", "go left", recognition_time=0.25)
     ]
     assert (tmp_path / "19700101-000001.000_000002.wav").is_file()
