@@ -25,7 +25,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SpeechEventConfig:
-    """The node's settings: one field per configuration key, with its default (docs/configuration.md describes each)."""
+    """The node's settings: one field per configuration key, with its default.
+
+    docs/configuration.md describes each key."""
 
     language: str = "english"
     verbose_mode: bool = False
