@@ -20,6 +20,7 @@ else:
                 "speech_event.recognizers.onnx",
                 "speech_event.recognizers.whisper",
                 "harness",
+                "harness.ros",
                 "fixtures",
             ],
             package_data={

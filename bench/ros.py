@@ -24,7 +24,7 @@ from std_msgs import msg as std_msgs
 
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
-from harness.ros_runner import NODE_SCRIPT, Processes, free_port
+from harness.processes import Processes, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -37,6 +37,8 @@ from speech_event.recognizers.tones import ToneRecognizer
 
 BLOCK = 4096
 RATE = 48000
+# The node of this tree, as the ROS replay starts it.
+NODE_SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "speech_event_application.py"
 
 
 def _wait(condition: Callable[[], bool], timeout: float = 30.0) -> None:

@@ -13,9 +13,10 @@ from typing import TYPE_CHECKING, Callable, List, Optional
 from harness.catalog import RECOGNIZERS, VOICES
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome
+from harness.processes import ReplayError
 from harness.replay_storage import replay_storage
 from harness.report import passed, report
-from harness.scenario import ReplayError, Say, Scenario, ScenarioError, load_scenario
+from harness.scenario import Say, Scenario, ScenarioError, load_scenario
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig, load_config
@@ -47,7 +48,7 @@ def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scena
     """How to play one scenario on the chosen transport."""
     if arguments.transport == "memory":
         return run_in_memory
-    from harness.ros_runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
+    from harness.ros.runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
 
     options = RosOptions(arguments.real_time, arguments.node_command, arguments.config, arguments.config_dir)
     replay = RosReplay(stack, options)

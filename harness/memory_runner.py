@@ -1,20 +1,103 @@
 """Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic."""
 
-from typing import Optional
+from typing import Callable, List, Optional
 
 from harness.catalog import engine_builder_for, recognizer_for
 from harness.outcome import Outcome, Published, result_text
+from harness.player import play
 from harness.scenario import Scenario
-from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, build_timeline
+from harness.timeline import build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
-from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
+from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal, MemoryPublisher
 from speech_event.interfaces.action import ACTION_NAME
-from speech_event.messages import Float32MultiArray, String, message_type_name
+from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, String
 from speech_event.node import SpeechEventNode
+from speech_event.ports import Timer
 
 SOUND_DETECTION = "soundDetection"
+
+
+class _NodeClock:
+    """The fake clock as the node sees it, noting when each of the node's own timers fires."""
+
+    def __init__(self, clock: FakeClock, fired: List[float]) -> None:
+        self._clock = clock
+        self._fired = fired
+
+    def now(self) -> float:
+        return self._clock.now()
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
+        def fire() -> None:
+            self._fired.append(self._clock.now())
+            callback()
+
+        return self._clock.call_at(when, fire)
+
+
+class _SoundDetection:
+    """soundDetection on the in-memory bus: a publisher there, shut down, crashed and back."""
+
+    def __init__(self, bus: InMemoryBus) -> None:
+        self._bus = bus
+        self._publisher = self._advertise()
+
+    def _advertise(self) -> MemoryPublisher:
+        return self._bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
+
+    def publish(self, index: int, message: Float32MultiArray) -> None:
+        self._publisher.publish(message)
+
+    def intrude(self, index: int, message: object) -> None:
+        intruder = self._bus.advertise(SIGNAL_TOPIC, type(message), node="wrongTypePublisher")
+        intruder.publish(message)
+        intruder.shutdown()
+
+    def go_down(self, crash: bool) -> None:
+        if crash:
+            self._publisher.crash()
+        else:
+            self._publisher.shutdown()
+
+    def come_up(self) -> None:
+        self._publisher = self._advertise()
+
+
+class _InMemory:
+    """The scenario's time is the fake clock's; the robot's clients call the node on the bus, and
+    what the node publishes there is collected."""
+
+    def __init__(self, bus: InMemoryBus, clock: FakeClock) -> None:
+        self.bus = bus
+        self._clock = clock
+        self.outcome = Outcome()
+        self._played = 0
+        bus.subscribe(TEXT_TOPIC, String, self._on_text)
+        bus.on_goal_end(self._on_goal_end)
+
+    def _on_text(self, message: object) -> None:
+        text = message.data  # type: ignore[attr-defined]
+        self.outcome.published.append(Published(self._clock.now(), text, self._played))
+
+    def _on_goal_end(self, goal: MemoryGoal) -> None:
+        transcription = getattr(goal.result, "transcription", "")
+        text = result_text(goal.state, transcription)
+        self.outcome.results.append(Published(self._clock.now(), text, self._played))
+
+    def advance_to(self, when: float) -> None:
+        self._clock.advance_to(when)
+
+    def settle(self, played: int, final: bool) -> None:
+        self._played = played
+        self._clock.advance_to(self._clock.now())  # the timers set at this time by the last event
+
+    def call(self, service: str, request: object) -> None:
+        self.outcome.responses.append(int(self.bus.call(service, request).response))  # type: ignore[attr-defined]
+
+    def send_goal(self, goal: RecogniseSpeechGoal) -> None:
+        self.bus.send_goal(ACTION_NAME, goal)
 
 
 def run_in_memory(
@@ -24,63 +107,28 @@ def run_in_memory(
     clock: Optional[FakeClock] = None,
 ) -> Outcome:
     """Every message the node published on /speechEvent/text, with its scenario time, every service
-    response and every action result.
+    response and every action result; and when the node's own timers fired (``node_timers``).
 
     ``recognition_seconds`` is how much scenario time each recognition takes. ``bus`` and ``clock``:
     ones that others watch too (the demo's window).
     """
     timeline = build_timeline(scenario)
     clock = clock or FakeClock()
-    bus = bus or InMemoryBus()
-    outcome = Outcome()
-    played = 0
-    bus.subscribe(
-        TEXT_TOPIC,
-        String,
-        lambda message: outcome.published.append(
-            Published(clock.now(), message.data, played)  # type: ignore[attr-defined]
-        ),
-    )
-
-    def goal_ended(goal: MemoryGoal) -> None:
-        transcription = getattr(goal.result, "transcription", "")
-        outcome.results.append(Published(clock.now(), result_text(goal.state, transcription), played))
-
-    bus.on_goal_end(goal_ended)
-    executor = ClockExecutor(clock, recognition_seconds)
+    runner = _InMemory(bus or InMemoryBus(), clock)
+    sound_detection = _SoundDetection(runner.bus)
+    node_clock = _NodeClock(clock, runner.outcome.node_timers)
+    executor = ClockExecutor(node_clock, recognition_seconds)
     node = SpeechEventNode(
         scenario.config,
-        bus,
-        clock,
+        runner.bus,
+        node_clock,
         recognizer_for(scenario.recognizer, scenario.config),
         executor,
         engine_builder_for(scenario.recognizer, scenario.config),
     )
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
     node.start()
-    for event in timeline.events:
-        clock.advance_to(event.time)
-        if isinstance(event, Publish):
-            if message_type_name(event.message) == Float32MultiArray._type:
-                sound_detection.publish(event.message)
-            else:  # another node, publishing another type on the same topic
-                intruder = bus.advertise(SIGNAL_TOPIC, type(event.message), node="wrongTypePublisher")
-                intruder.publish(event.message)
-                intruder.shutdown()
-        elif isinstance(event, GoDown):
-            if event.kind == "crash":
-                sound_detection.crash()
-            else:
-                sound_detection.shutdown()
-        elif isinstance(event, ComeUp):
-            sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node=SOUND_DETECTION)
-        elif isinstance(event, CallService):
-            outcome.responses.append(int(bus.call(event.service, event.request).response))  # type: ignore[attr-defined]
-        elif isinstance(event, SendGoal):
-            bus.send_goal(ACTION_NAME, event.goal)
-        played += 1
-    clock.advance_to(timeline.end)
+    play(timeline, runner, sound_detection)
     clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
     node.stop()
     node.flush_storage()
-    return outcome
+    return runner.outcome

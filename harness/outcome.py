@@ -19,6 +19,9 @@ class Outcome:
     responses: List[int] = field(default_factory=list)
     # One per action goal, in the order they ended, written by result_text.
     results: List[Published] = field(default_factory=list)
+    # In memory: each time one of the node's own timers fired (health checks, utterance ends by
+    # whatever rule ended them, goal deadlines, ...). A ROS replay stops its clock at each.
+    node_timers: List[float] = field(default_factory=list)
 
 
 def result_text(state: str, transcription: str) -> str:

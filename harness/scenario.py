@@ -28,10 +28,6 @@ class ScenarioError(Exception):
     """A scenario file that does not follow the format."""
 
 
-class ReplayError(Exception):
-    """A replay could not go on: a process it needs did not start, answer or stop."""
-
-
 @dataclass(frozen=True)
 class Say:
     text: str

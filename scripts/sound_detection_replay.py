@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-# soundDetection stand-in that replays a scenario file (see harness/ros_sound_detection.py).
+# soundDetection stand-in that replays a scenario file (see harness/ros/stand_in.py).
 import sys
 
 try:
-    from harness.ros_sound_detection import main
+    from harness.ros.stand_in import main
 except ModuleNotFoundError as missing:  # this Python lacks Speech Event or what it needs
     print(
         f"error: {sys.executable} cannot import {missing.name}: see README.md, 'On ROS and on the robot'",

@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-# The checker of the test-harness launch file (see harness/ros_checker.py).
+# The checker of the test-harness launch file (see harness/ros/checker.py).
 import sys
 
 try:
-    from harness.ros_checker import main
+    from harness.ros.checker import main
 except ModuleNotFoundError as missing:  # this Python lacks Speech Event or what it needs
     print(
         f"error: {sys.executable} cannot import {missing.name}: see README.md, 'On ROS and on the robot'",

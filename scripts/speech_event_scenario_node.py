@@ -3,7 +3,7 @@
 import sys
 
 try:
-    from harness.ros_scenario_node import main
+    from harness.ros.scenario_node import main
 except ModuleNotFoundError as missing:  # this Python lacks Speech Event or what it needs
     print(
         f"error: {sys.executable} cannot import {missing.name}: see README.md, 'On ROS and on the robot'",

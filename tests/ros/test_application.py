@@ -18,7 +18,7 @@ from std_msgs import msg as std_msgs
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
-from harness.ros_runner import Processes, free_port
+from harness.processes import Processes, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
 from tests.helpers.application import APPLICATION

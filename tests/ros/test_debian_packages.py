@@ -28,9 +28,9 @@ COMMANDS = (
 IMPORTED = (
     "speech_event.adapters.ros",
     "speech_event.gui",
-    "harness.ros_runner",
-    "harness.ros_sound_detection",
-    "harness.ros_checker",
+    "harness.ros.runner",
+    "harness.ros.stand_in",
+    "harness.ros.checker",
     "harness.driver_node",
     "tests.ros.conftest",
     "tests.helpers.two_hosts",

@@ -17,7 +17,7 @@ import pytest
 
 from fixtures.audio import speak_tones
 from harness.cli import open_demo_window
-from harness.ros_runner import Processes
+from harness.processes import Processes
 from harness.scenario import Say, Scenario
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor

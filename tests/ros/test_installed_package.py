@@ -12,7 +12,7 @@ from typing import Dict, Iterator
 import pytest
 import rospy
 
-from harness.ros_runner import Processes
+from harness.processes import Processes
 from speech_event.srv import SetLanguage
 from tests.helpers.paths import ROOT
 from tests.ros.conftest import serves, wait_for

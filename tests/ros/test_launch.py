@@ -13,7 +13,7 @@ import rosgraph
 import soundfile
 
 from fixtures.audio import speak_tones
-from harness.ros_runner import Processes, descendants, free_port
+from harness.processes import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from tests.helpers.paths import ROOT
 from tests.helpers.text_listener import received, write_listener

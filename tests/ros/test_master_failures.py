@@ -16,7 +16,7 @@ from typing import Dict
 
 import rosgraph
 
-from harness.ros_runner import Processes, descendants, free_port
+from harness.processes import Processes, descendants, free_port
 from speech_event.adapters.ros import master_answers
 from tests.helpers.application import APPLICATION
 from tests.helpers.text_listener import assert_errors_on_time, received, write_listener

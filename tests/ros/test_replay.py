@@ -11,7 +11,8 @@ from typing import Dict, Set
 import pytest
 import rosgraph
 
-from harness.ros_runner import descendants, route_address
+from harness.processes import descendants
+from harness.ros.runner import route_address
 from tests.helpers.paths import ROOT
 from tests.helpers.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
 from tests.ros.conftest import ros_environment

@@ -21,7 +21,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from std_msgs import msg as std_msgs
 
 from fixtures.audio import speak_tones
-from harness.ros_runner import Processes
+from harness.processes import Processes
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
 from tests.helpers.application import APPLICATION

@@ -14,7 +14,7 @@ from typing import Any, Dict, Iterator, List, Optional
 
 import pytest
 
-from harness.ros_runner import Processes
+from harness.processes import Processes
 from harness.scenario import load_scenario
 from speech_event.config import SpeechEventConfig
 from tests.helpers.application import APPLICATION

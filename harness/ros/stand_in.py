@@ -1,6 +1,7 @@
-"""The soundDetection stand-in for replay on a real roscore (its own process).
+"""The soundDetection stand-in of a replay on a real roscore: the process (``main``), and the
+harness's side of it (``StandIns``).
 
-It builds the scenario's timeline itself (the same, seeded, as the harness's). Stepped by the
+The process builds the scenario's timeline itself (the same, seeded, as the harness's). Stepped by the
 harness, it publishes events when told, one line each on stdin/stdout: it prints ``started`` once
 it is a ROS node, not yet a publisher (so the harness can start the next incarnation during an
 outage, and bring it up at once when the outage ends); ``advertise`` makes it a publisher, and it
@@ -15,15 +16,19 @@ from inside the process that crashes, so there it refuses scenarios with ``kind 
 """
 
 import argparse
+import os
+import signal
 import subprocess
 import sys
 import time
-from typing import List, Optional
+from pathlib import Path
+from typing import Any, Callable, List, Optional
 
 import rospy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
+from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, wait_until
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC
@@ -31,6 +36,7 @@ from speech_event.adapters.ros import RosPublisher, RosTransport
 from speech_event.application import without_remappings
 from speech_event.messages import Float32MultiArray
 
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "sound_detection_replay.py"
 CONNECT_TIMEOUT = 30.0
 CLOCK_TICK = 0.005
 CHECKER_READY_TOPIC = "/speechEventReplay/checker_ready"
@@ -138,6 +144,104 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 1
     if arguments.autonomous:
         config_arguments = ["-c", arguments.config] if arguments.config else []
-        wrong_type_command = [sys.executable, "-m", "harness.ros_sound_detection", arguments.scenario]
+        wrong_type_command = [sys.executable, "-m", "harness.ros.stand_in", arguments.scenario]
         return _play_alone(timeline, publisher, [*wrong_type_command, *config_arguments, "--wrong-type"])
     return _play_stepped(events, publisher)
+
+
+class StandIns:
+    """The soundDetection processes of a replay: started, told to publish, shut down or killed.
+
+    While soundDetection is down the next incarnation is already started, as a ROS node that is no
+    publisher yet (under a name of its own, so a crashed one's stale registration stays for the
+    node to find), and only advertises when the outage ends: a restart takes no scenario time,
+    also in real time. ``live_connections`` gives the node's live connections on the signal topic,
+    as getBusStats does: [connection id, bytes received, messages received, drop estimate, connected].
+    """
+
+    def __init__(
+        self,
+        processes: Processes,
+        scenario_path: str,
+        base_config: Optional[str],
+        live_connections: Callable[[], List[Any]],
+    ) -> None:
+        self._processes = processes
+        self._command = [sys.executable, str(SCRIPT), scenario_path]
+        if base_config:
+            self._command += ["-c", base_config]
+        self._live_connections = live_connections
+        self._incarnations = 0
+        self._process = self._up(self._launch())
+        self._next: Optional[subprocess.Popen[str]] = None
+        self._sent = 0  # messages this incarnation has published
+        self._intruders: List[subprocess.Popen[str]] = []  # the wrong-type publishers started
+
+    def _launch(self) -> "subprocess.Popen[str]":
+        name = "soundDetection" if self._incarnations == 0 else f"soundDetection{self._incarnations}"
+        self._incarnations += 1
+        process = self._processes.start("sound_detection", [*self._command, "--name", name], talk=True)
+        self._expect(process, "started")
+        return process
+
+    def _up(self, process: "subprocess.Popen[str]") -> "subprocess.Popen[str]":
+        self._tell(process, "advertise")
+        self._expect(process, "ready")
+        return process
+
+    @staticmethod
+    def _expect(process: "subprocess.Popen[str]", expected: str) -> None:
+        line = process.stdout.readline().strip() if process.stdout else ""
+        if line != expected:
+            raise ReplayError(f"the soundDetection stand-in said {line!r}, expected {expected!r}")
+
+    @staticmethod
+    def _tell(process: "subprocess.Popen[str]", command: str) -> None:
+        assert process.stdin is not None
+        process.stdin.write(command + "\n")
+        process.stdin.flush()
+
+    def publish(self, index: int, message: Float32MultiArray) -> None:
+        """The incarnation that is up publishes event ``index`` (``message``: it builds the same
+        timeline); back once the node has it."""
+        self._tell(self._process, f"publish {index}")
+        self._expect(self._process, f"published {index}")
+        self._sent += 1
+        sent = self._sent
+        wait_until(
+            lambda: any(int(c[2]) >= sent for c in self._live_connections()),
+            f"the node to receive message {sent}",
+        )
+
+    def intrude(self, index: int, message: object) -> None:
+        """Another node publishes event ``index`` (a message of another type) on the topic.
+
+        Not waited for here: starting a ROS node takes a second or more, which in real time would
+        stop the scenario's next blocks for longer than a pause. Checked at the end."""
+        self._intruders.append(
+            self._processes.start("wrong_type", [*self._command, "--wrong-type", str(index)])
+        )
+
+    def go_down(self, crash: bool) -> None:
+        """soundDetection shuts down, or is killed with SIGKILL; the next incarnation starts."""
+        if crash:
+            os.killpg(self._process.pid, signal.SIGKILL)
+        else:
+            self._tell(self._process, "shutdown")
+        self._process.wait(EVENT_TIMEOUT)
+        wait_until(lambda: not self._live_connections(), "the node to lose soundDetection")
+        self._next = self._launch()
+
+    def come_up(self) -> None:
+        """The next incarnation advertises."""
+        self._process = self._up(self._next or self._launch())
+        self._next = None
+        self._sent = 0
+
+    def stop(self) -> None:
+        for process in (self._process, self._next):
+            if process is not None:
+                self._processes.stop(process)
+        for intruder in self._intruders:
+            if intruder.wait(EVENT_TIMEOUT) != 0:
+                raise ReplayError("the wrong-type publisher failed; see its log")

@@ -11,7 +11,7 @@ from std_msgs.msg import String
 
 from harness.outcome import Outcome, Published
 from harness.report import passed, report
-from harness.ros_sound_detection import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
+from harness.ros.stand_in import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from speech_event import TEXT_TOPIC
 from speech_event.application import without_remappings

@@ -1,0 +1,117 @@
+"""The process supervisor of the replays, the ROS tests and the bench: imports nothing of ROS.
+
+Each process starts in a process group of its own, logs to a file of its own, and is stopped with
+everything below it (roslaunch starts rosmaster and rosout in sessions of their own), also on
+failure or Ctrl-C.
+"""
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import time
+from contextlib import closing
+from pathlib import Path
+from typing import Callable, Dict, List, Sequence, Set
+
+# How long a replay waits for one real event (a message received, a connection made or dropped).
+EVENT_TIMEOUT = 20.0
+
+
+class ReplayError(Exception):
+    """A replay could not go on: a process it needs did not start, answer or stop."""
+
+
+def wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT_TIMEOUT) -> None:
+    """Poll ``condition`` until it holds; a ReplayError naming ``what`` after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise ReplayError(f"gave up after {timeout:.0f} s waiting for {what}")
+        time.sleep(0.002)
+
+
+def descendants(pid: int) -> Set[int]:
+    """Every live process below ``pid``, from /proc: roslaunch starts rosmaster and rosout in
+    sessions of their own, out of reach of a signal to roscore's process group."""
+    parents: Dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parents[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):  # the process ended while being read
+            continue
+    found: Set[int] = set()
+    frontier = {pid}
+    while frontier:
+        frontier = {child for child, parent in parents.items() if parent in frontier}
+        found |= frontier
+    return found
+
+
+def free_port() -> int:
+    """A TCP port on loopback that nothing listens on now."""
+    with closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+class Processes:
+    """Every process the runner starts, each in its own process group, all stopped at the end."""
+
+    def __init__(self, environment: Dict[str, str], log_dir: Path) -> None:
+        self._environment = environment
+        self._log_dir = log_dir
+        self._started: List[subprocess.Popen] = []  # type: ignore[type-arg]
+
+    def start(self, name: str, command: Sequence[str], talk: bool = False) -> "subprocess.Popen[str]":
+        # The child holds its own copy of the log's descriptor; ours closes once it has started.
+        with open(self.log(name), "a") as log:
+            try:
+                process = subprocess.Popen(
+                    list(command),
+                    env=self._environment,
+                    stdin=subprocess.PIPE if talk else subprocess.DEVNULL,
+                    stdout=subprocess.PIPE if talk else log,
+                    stderr=log,
+                    text=True,
+                    start_new_session=True,
+                )
+            except OSError as problem:  # no such executable, not executable
+                raise ReplayError(f"cannot start the {name} ({command[0]}): {problem.strerror}") from None
+        self._started.append(process)
+        return process
+
+    def log(self, name: str) -> Path:
+        return self._log_dir / f"{name}.log"
+
+    def last_lines(self, name: str, count: int = 15) -> str:
+        """The end of a process's log, for an error that must say why it died."""
+        try:
+            lines = self.log(name).read_text(errors="replace").splitlines()
+        except OSError:
+            return "(no output)"
+        return "\n".join(lines[-count:]) or "(no output)"
+
+    def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
+        if process.poll() is not None:
+            return
+        family = descendants(process.pid)  # before the signal: orphans are no longer below it
+        with contextlib.suppress(ProcessLookupError):  # it may have gone already
+            os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(grace)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+        deadline = time.monotonic() + grace
+        while any(Path(f"/proc/{pid}").exists() for pid in family) and time.monotonic() < deadline:
+            time.sleep(0.05)  # a clean roscore stops its rosmaster and rosout itself
+        for pid in family:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+
+    def stop_all(self) -> None:
+        for process in reversed(self._started):
+            self.stop(process)

@@ -1,0 +1,317 @@
+"""Plays scenarios to the node on a real roscore: the node and soundDetection are processes of their own.
+
+By default the runner drives ROS time through /clock (/use_sim_time), so messages and error counts
+are as exact as in memory although processes start and die in real time: before it moves the clock
+on it waits for each real event (the node has received a block, a connection has dropped or been
+made), and after each clock step it gives the node's timers time to run. ``real_time`` plays on the
+wall clock instead. Every process it starts is stopped again, also on failure or Ctrl-C.
+
+The walk over the timeline is the in-memory runner's (harness/player.py); where the clock stops
+besides the events, and what is waited for there, comes from harness/ros/schedule.py, and
+soundDetection is harness/ros/stand_in.py's processes.
+"""
+
+import contextlib
+import dataclasses
+import os
+import shlex
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.parse
+import xmlrpc.client
+from contextlib import ExitStack, closing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, List, Optional
+
+import actionlib
+import rosgraph
+import rospy
+from actionlib_msgs.msg import GoalStatus
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
+
+from harness.catalog import engine_for
+from harness.outcome import Outcome, Published, result_text
+from harness.player import play
+from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
+from harness.ros.schedule import TEXT_WAIT, TIMER_SETTLE, Schedule, scenario_start
+from harness.ros.stand_in import StandIns
+from harness.scenario import Scenario
+from harness.timeline import SendGoal, build_timeline
+from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.adapters.ros import generated_class, master_answers
+from speech_event.config import format_config
+from speech_event.interfaces.action import ACTION_NAME
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.messages import (
+    RECOGNISE_SPEECH,
+    SET_ENABLED,
+    SET_LANGUAGE,
+    RecogniseSpeechGoal,
+    ServiceType,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"
+STARTUP_TIMEOUT = 60.0
+# Our node sets this to the ROS time it started (its health checks count from there).
+START_TIME_PARAM = "/speechEvent/start_time"
+SERVICES: Dict[str, ServiceType] = {SET_ENABLED_SERVICE: SET_ENABLED, SET_LANGUAGE_SERVICE: SET_LANGUAGE}
+# actionlib's terminal states, as a scenario's results name them.
+GOAL_STATES = {
+    GoalStatus.SUCCEEDED: "succeeded",
+    GoalStatus.ABORTED: "aborted",
+    GoalStatus.PREEMPTED: "preempted",
+    GoalStatus.RECALLED: "recalled",
+    GoalStatus.REJECTED: "rejected",
+    GoalStatus.LOST: "lost",
+}
+
+
+@dataclass
+class RosOptions:
+    real_time: bool = False
+    node_command: Optional[str] = None
+    base_config: Optional[str] = None
+    # Where the node's configuration file is written (a folder a node on another host can read).
+    config_dir: Optional[str] = None
+
+
+def route_address(master_uri: str) -> str:
+    """This host's address on the route to the master (no packet is sent: UDP connect only)."""
+    address = urllib.parse.urlsplit(master_uri)
+    with closing(socket.socket(socket.AF_INET, socket.SOCK_DGRAM)) as probe:
+        probe.connect((address.hostname or "127.0.0.1", address.port or 11311))
+        return str(probe.getsockname()[0])
+
+
+class RosReplay:
+    """One roscore (its own, or the one ROS_MASTER_URI names) and the harness's own ROS node."""
+
+    def __init__(self, stack: ExitStack, options: RosOptions) -> None:
+        self._options = options
+        self._work = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="speech_event_ros_")))
+        environment = dict(os.environ)
+        environment["ROS_HOME"] = str(self._work / "ros_home")
+        environment["ROS_LOG_DIR"] = str(self._work / "ros_log")
+        environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), environment.get("PYTHONPATH")]))
+        self.processes = Processes(environment, self._work)
+        stack.callback(self.processes.stop_all)
+        if "ROS_MASTER_URI" not in os.environ:
+            # Our own master, on loopback: everything of this replay stays on this host.
+            port = free_port()
+            environment["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+            environment.setdefault("ROS_IP", "127.0.0.1")
+            self.processes.start("roscore", ["roscore", "-p", str(port)])
+        elif not ({"ROS_IP", "ROS_HOSTNAME"} & set(environment)):
+            # A given master, maybe on another host: be reachable from there (the user's ROS_IP
+            # or ROS_HOSTNAME wins).
+            environment["ROS_IP"] = route_address(environment["ROS_MASTER_URI"])
+        os.environ.update(
+            {key: environment[key] for key in ("ROS_MASTER_URI", "ROS_IP") if key in environment}
+        )
+        self._master = rosgraph.Master("/speechEventReplay", master_uri=environment["ROS_MASTER_URI"])
+        wait_until(
+            lambda: master_answers(environment["ROS_MASTER_URI"]),
+            "the ROS master at " + environment["ROS_MASTER_URI"],
+            STARTUP_TIMEOUT,
+        )
+        rospy.set_param("/use_sim_time", not options.real_time)
+        rospy.init_node("speechEventReplay", disable_signals=True)
+        self._clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+        self._outcome = Outcome()
+        self._now = 0.0
+        self._wall_start = time.monotonic()
+        self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
+        action = generated_class(RECOGNISE_SPEECH.name + "Action", "msg")
+        self._action_client = actionlib.ActionClient(ACTION_NAME, action)
+        # A goal handle must be kept, or actionlib stops tracking its goal.
+        self._goals: List[actionlib.ClientGoalHandle] = []
+        self._schedule = Schedule(Outcome())  # of the scenario being played
+
+    def _scenario_time(self) -> float:
+        """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
+        return time.monotonic() - self._wall_start if self._options.real_time else self._now
+
+    def _on_text(self, message: String) -> None:
+        self._outcome.published.append(Published(self._scenario_time(), message.data))
+
+    # -- the walk's runner (harness/player.py): the clock, the services and the action ----------
+
+    def advance_to(self, when: float) -> None:
+        self._now = when
+        if self._options.real_time:
+            time.sleep(max(0.0, self._wall_start + when - time.monotonic()))
+        else:
+            self._clock.publish(Clock(clock=rospy.Time.from_sec(when)))
+            time.sleep(TIMER_SETTLE)
+
+    def settle(self, played: int, final: bool) -> None:
+        """Wait (a while) for what the node published in memory by now, before the next event.
+
+        In real time waiting would shift the events after it, so it waits only at the end."""
+        if self._options.real_time and not final:
+            return
+        texts, results = self._schedule.due(self._now, played)
+        deadline = time.monotonic() + TEXT_WAIT
+        while time.monotonic() < deadline and (
+            len(self._outcome.published) < texts or len(self._outcome.results) < results
+        ):
+            time.sleep(0.002)
+
+    def call(self, service: str, request: object) -> None:
+        ros_service = generated_class(SERVICES[service].name, "srv")
+        try:
+            rospy.wait_for_service(service, timeout=EVENT_TIMEOUT)
+            ros_request = ros_service._request_class(**dataclasses.asdict(request))  # type: ignore[call-overload]
+            response = rospy.ServiceProxy(service, ros_service)(ros_request)
+        except (rospy.ROSException, rospy.ServiceException) as problem:
+            raise ReplayError(f"calling {service}: {problem}") from None
+        self._outcome.responses.append(int(response.response))
+
+    def send_goal(self, goal: RecogniseSpeechGoal) -> None:
+        goal_type = generated_class(RECOGNISE_SPEECH.name + "Goal", "msg")
+
+        def transition(handle: actionlib.ClientGoalHandle) -> None:
+            if handle.get_comm_state() == actionlib.CommState.DONE:
+                state = GOAL_STATES.get(handle.get_goal_status(), "unknown")
+                result = handle.get_result()
+                transcription = result.transcription if result is not None else ""
+                self._outcome.results.append(
+                    Published(self._scenario_time(), result_text(state, transcription))
+                )
+
+        handle = self._action_client.send_goal(goal_type(**dataclasses.asdict(goal)), transition)
+        self._goals.append(handle)
+        # Accepted at this clock time: the clock must not move before the node has it.
+        wait_until(
+            lambda: handle.get_comm_state() in (actionlib.CommState.ACTIVE, actionlib.CommState.DONE),
+            "the node to accept the action goal",
+        )
+
+    # -- the node under test ----------------------------------------------------------------------
+
+    def _start_node(self, scenario: Scenario) -> "subprocess.Popen[str]":
+        engine, config = engine_for(scenario.recognizer, scenario.config)
+        config_dir = Path(self._options.config_dir) if self._options.config_dir else self._work
+        config_path = config_dir / "speech_event_configuration.ini"
+        config_path.write_text(format_config(config))
+        if self._options.node_command:
+            # Split first, then fill in: a path with spaces stays one word, other braces stay as written.
+            fill = {"{config}": str(config_path), "{recognizer}": engine}
+            command = [_filled(word, fill) for word in shlex.split(self._options.node_command)]
+        else:
+            command = [
+                sys.executable,
+                str(NODE_SCRIPT),
+                "-c",
+                str(config_path),
+                "--recognizer",
+                engine,
+            ]
+        return self.processes.start("node", command)
+
+    def _wait_for_the_action_server(self) -> None:
+        """wait_for_server waits for the server's topics only: a goal sent before the node hears the
+        goal topic is lost, so this waits for that connection too."""
+        if not self._action_client.wait_for_server(rospy.Duration(EVENT_TIMEOUT)):
+            raise ReplayError(f"the node serves no action {ACTION_NAME}")
+        deadline = time.monotonic() + EVENT_TIMEOUT
+        while self._action_client.pub_goal.get_num_connections() == 0:
+            if time.monotonic() > deadline:
+                raise ReplayError(f"the node does not hear the goals of {ACTION_NAME}")
+            time.sleep(0.01)
+
+    def _wait_for_node(self, node: "subprocess.Popen[str]") -> None:
+        deadline = time.monotonic() + STARTUP_TIMEOUT
+        while not self._node_ready():
+            status = node.poll()
+            if status is not None:
+                raise ReplayError(
+                    f"the node under test exited with status {status} before it subscribed to "
+                    f"{SIGNAL_TOPIC}; its last output:\n{self.processes.last_lines('node')}"
+                )
+            if time.monotonic() > deadline:
+                raise ReplayError(f"gave up after {STARTUP_TIMEOUT:.0f} s waiting for the node to subscribe")
+            time.sleep(0.01)
+
+    def _align_with_the_node(self, period: float) -> None:
+        """Real time: start the scenario clock at one of the node's health-check instants, so its
+        checks fall at multiples of the period on the scenario clock, as in sim time. Our node says
+        when it started (its checks count from there); for another, when it became ready will do."""
+        start = scenario_start(float(rospy.get_param(START_TIME_PARAM, time.time())), time.time(), period)
+        self._wall_start = time.monotonic() + (start - time.time())
+        time.sleep(max(0.0, self._wall_start - time.monotonic()))
+        self._outcome = Outcome()  # what the node said before the scenario's t = 0 is no part of it
+
+    def _node_uri(self) -> str:
+        _, subscribers, _ = self._master.getSystemState()
+        nodes = [node for topic, names in subscribers if topic == SIGNAL_TOPIC for node in names]
+        others = [node for node in nodes if node != "/speechEventReplay"]
+        if not others:
+            raise ReplayError(f"no node subscribes to {SIGNAL_TOPIC}")
+        return str(self._master.lookupNode(others[0]))
+
+    def _node_ready(self) -> bool:
+        try:
+            _, subscribers, _ = self._master.getSystemState()
+        except Exception:
+            return False
+        listening = any(topic == SIGNAL_TOPIC and names for topic, names in subscribers)
+        return listening and self._text_subscriber.get_num_connections() > 0
+
+    def _live_connections(self, node_uri: str) -> List[Any]:
+        """The node's live connections on the signal topic, as getBusStats gives them:
+        [connection id, bytes received, messages received, drop estimate, connected]."""
+        proxy = xmlrpc.client.ServerProxy(node_uri)
+        try:
+            stats: Any = proxy.getBusStats("/speechEventReplay")
+        except (OSError, xmlrpc.client.Error) as problem:  # the node's host or process gone
+            raise ReplayError(
+                f"the node under test at {node_uri} did not answer getBusStats: {problem}"
+            ) from None
+        subscriptions = stats[2][1]
+        return [
+            c for topic, connections in subscriptions if topic == SIGNAL_TOPIC for c in connections if c[4]
+        ]
+
+    # -- playing ----------------------------------------------------------------------------------
+
+    def play(self, scenario: Scenario) -> Outcome:
+        timeline = build_timeline(scenario)
+        self._schedule = Schedule.of(scenario)
+        self._outcome = Outcome()
+        self._goals = []
+        self.advance_to(0.0)
+        with contextlib.suppress(KeyError):
+            rospy.delete_param(START_TIME_PARAM)  # the last scenario's node said it
+        node = self._start_node(scenario)
+        self._wait_for_node(node)
+        if any(isinstance(event, SendGoal) for event in timeline.events):
+            self._wait_for_the_action_server()
+        node_uri = self._node_uri()
+        stand_ins = StandIns(
+            self.processes,
+            scenario.source,
+            self._options.base_config,
+            lambda: self._live_connections(node_uri),
+        )
+        if self._options.real_time:
+            self._align_with_the_node(scenario.config.health_check_period)
+        play(timeline, self, stand_ins, self._schedule.stops)
+        # What was observed by the end of the timeline, before anything is torn down: a health
+        # check between stopping soundDetection and stopping the node is no part of the scenario.
+        outcome, self._outcome = self._outcome, Outcome()
+        stand_ins.stop()
+        self.processes.stop(node)
+        return outcome
+
+
+def _filled(word: str, values: Dict[str, str]) -> str:
+    for placeholder, value in values.items():
+        word = word.replace(placeholder, value)
+    return word

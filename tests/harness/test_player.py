@@ -1,0 +1,96 @@
+"""The one walk over a timeline (harness/player.py), and the node's own times the in-memory run notes
+for the ROS replay's schedule (harness/ros/schedule.py)."""
+
+from typing import List
+
+from harness.memory_runner import run_in_memory
+from harness.player import play
+from harness.scenario import Say, Scenario, Silence
+from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
+from speech_event.config import SpeechEventConfig
+from speech_event.interfaces.services import SET_ENABLED_SERVICE
+from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, SetEnabledRequest, String
+
+
+class _Recorder:
+    """Both sides of a runner, writing down what the walk asks of them."""
+
+    def __init__(self) -> None:
+        self.log: List[str] = []
+
+    def advance_to(self, when: float) -> None:
+        self.log.append(f"clock {when}")
+
+    def settle(self, played: int, final: bool) -> None:
+        self.log.append(f"settle {played}{' final' if final else ''}")
+
+    def publish(self, index: int, message: Float32MultiArray) -> None:
+        self.log.append(f"publish {index}")
+
+    def intrude(self, index: int, message: object) -> None:
+        self.log.append(f"intrude {index}")
+
+    def go_down(self, crash: bool) -> None:
+        self.log.append(f"down crash={crash}")
+
+    def come_up(self) -> None:
+        self.log.append("up")
+
+    def call(self, service: str, request: object) -> None:
+        self.log.append(f"call {service}")
+
+    def send_goal(self, goal: RecogniseSpeechGoal) -> None:
+        self.log.append("goal")
+
+
+def test_the_walk_stops_at_every_event_time_stop_and_the_end_and_settles_around_each_event() -> None:
+    timeline = Timeline(
+        [
+            Publish(0.5, Float32MultiArray(data=[0.0])),
+            Publish(0.5, String(data="not audio")),
+            GoDown(1.0, "crash"),
+            ComeUp(2.0),
+            CallService(2.0, SET_ENABLED_SERVICE, SetEnabledRequest("false")),
+            SendGoal(3.0, RecogniseSpeechGoal(1.0)),
+        ],
+        end=4.0,
+    )
+    recorder = _Recorder()
+    play(timeline, recorder, recorder, stops=[1.5, 0.5])
+    assert recorder.log == [
+        "clock 0.5",
+        "settle 0",
+        "publish 0",
+        "settle 1",
+        "intrude 1",
+        "settle 2",
+        "clock 1.0",
+        "settle 2",
+        "down crash=True",
+        "settle 3",
+        "clock 1.5",
+        "settle 3",
+        "clock 2.0",
+        "settle 3",
+        "up",
+        "settle 4",
+        f"call {SET_ENABLED_SERVICE}",
+        "settle 5",
+        "clock 3.0",
+        "settle 5",
+        "goal",
+        "settle 6",
+        "clock 4.0",
+        "settle 6 final",
+    ]
+
+
+def test_the_in_memory_run_notes_the_nodes_own_times_its_checks_and_the_utterance_end() -> None:
+    config = SpeechEventConfig()
+    scenario = Scenario("one", "one", config, (Say("go"), Silence(4.0)), ("go",), voice="tones")
+    outcome = run_in_memory(scenario)
+    last_block = build_timeline(scenario).events[-1].time
+    assert outcome.published[0].time == last_block + config.speech_pause_period
+    assert last_block + config.speech_pause_period in outcome.node_timers  # the pause ended it
+    assert last_block + config.speculation_gap in outcome.node_timers  # the node speculated
+    assert config.health_check_period in outcome.node_timers
