@@ -17,49 +17,108 @@ paths may move::
     # publish Float32MultiArray blocks on it, advance the clock past speech_pause_period
 """
 
-from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
-from speech_event.adapters.fake_clock import FakeClock
-from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.adapters.system_clock import SystemClock
-from speech_event.config import SpeechEventConfig, apply_overrides, load_config, parse_config
-from speech_event.errors import ConfigError, ModelError, StorageError
-from speech_event.messages import (
-    RECOGNISE_SPEECH,
-    SET_ENABLED,
-    SET_LANGUAGE,
-    DiagnosticArray,
-    DiagnosticStatus,
-    Float32MultiArray,
-    KeyValue,
-    MultiArrayDimension,
-    MultiArrayLayout,
-    RecogniseSpeechFeedback,
-    RecogniseSpeechGoal,
-    RecogniseSpeechResult,
-    SetEnabledRequest,
-    SetEnabledResponse,
-    SetLanguageRequest,
-    SetLanguageResponse,
-    String,
-)
-from speech_event.node import SpeechEventNode
-from speech_event.ports import (
-    ActionGoal,
-    Audio,
-    Cancellable,
-    Clock,
-    Executor,
-    Publisher,
-    PublisherStatus,
-    Recognizer,
-    Stoppable,
-    Timer,
-    Transcript,
-    Transport,
-    WholePhrases,
-)
-from speech_event.recognizers import RECOGNIZERS, RecognizerFactory, engine_builder
-from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
+import importlib
+from typing import TYPE_CHECKING, Any, Dict, List
+
+if TYPE_CHECKING:  # for type checkers; at run time each name is imported when first used
+    from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
+    from speech_event.adapters.fake_clock import FakeClock
+    from speech_event.adapters.memory_bus import InMemoryBus
+    from speech_event.adapters.system_clock import SystemClock
+    from speech_event.config import SpeechEventConfig, apply_overrides, load_config, parse_config
+    from speech_event.errors import ConfigError, ModelError, StorageError
+    from speech_event.messages import (
+        RECOGNISE_SPEECH,
+        SET_ENABLED,
+        SET_LANGUAGE,
+        DiagnosticArray,
+        DiagnosticStatus,
+        Float32MultiArray,
+        KeyValue,
+        MultiArrayDimension,
+        MultiArrayLayout,
+        RecogniseSpeechFeedback,
+        RecogniseSpeechGoal,
+        RecogniseSpeechResult,
+        SetEnabledRequest,
+        SetEnabledResponse,
+        SetLanguageRequest,
+        SetLanguageResponse,
+        String,
+    )
+    from speech_event.node import SpeechEventNode
+    from speech_event.ports import (
+        ActionGoal,
+        Audio,
+        Cancellable,
+        Clock,
+        Executor,
+        Publisher,
+        PublisherStatus,
+        Recognizer,
+        Stoppable,
+        Timer,
+        Transcript,
+        Transport,
+        WholePhrases,
+    )
+    from speech_event.recognizers import RECOGNIZERS, RecognizerFactory, engine_builder
+    from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
+
+# Imported on first use, so that importing speech_event (or the ROS classes genpy builds in it,
+# speech_event.srv and speech_event.msg, as rosservice does under the system Python) needs no numpy.
+_EXPORTS: Dict[str, str] = {
+    "ActionGoal": "speech_event.ports",
+    "Audio": "speech_event.ports",
+    "Cancellable": "speech_event.ports",
+    "Clock": "speech_event.ports",
+    "ClockExecutor": "speech_event.adapters.executors",
+    "ConfigError": "speech_event.errors",
+    "DiagnosticArray": "speech_event.messages",
+    "DiagnosticStatus": "speech_event.messages",
+    "Executor": "speech_event.ports",
+    "FakeClock": "speech_event.adapters.fake_clock",
+    "Float32MultiArray": "speech_event.messages",
+    "InMemoryBus": "speech_event.adapters.memory_bus",
+    "KeyValue": "speech_event.messages",
+    "ModelError": "speech_event.errors",
+    "MultiArrayDimension": "speech_event.messages",
+    "MultiArrayLayout": "speech_event.messages",
+    "Publisher": "speech_event.ports",
+    "PublisherStatus": "speech_event.ports",
+    "RECOGNISE_SPEECH": "speech_event.messages",
+    "RECOGNIZERS": "speech_event.recognizers",
+    "RecogniseSpeechFeedback": "speech_event.messages",
+    "RecogniseSpeechGoal": "speech_event.messages",
+    "RecogniseSpeechResult": "speech_event.messages",
+    "Recognizer": "speech_event.ports",
+    "RecognizerFactory": "speech_event.recognizers",
+    "SET_ENABLED": "speech_event.messages",
+    "SET_LANGUAGE": "speech_event.messages",
+    "SIGNAL_TOPIC": "speech_event.topics",
+    "SOUND_DETECTION_DOWN": "speech_event.topics",
+    "SPEECH_NOT_RECOGNIZED": "speech_event.topics",
+    "SetEnabledRequest": "speech_event.messages",
+    "SetEnabledResponse": "speech_event.messages",
+    "SetLanguageRequest": "speech_event.messages",
+    "SetLanguageResponse": "speech_event.messages",
+    "SpeechEventConfig": "speech_event.config",
+    "SpeechEventNode": "speech_event.node",
+    "Stoppable": "speech_event.ports",
+    "StorageError": "speech_event.errors",
+    "String": "speech_event.messages",
+    "SystemClock": "speech_event.adapters.system_clock",
+    "TEXT_TOPIC": "speech_event.topics",
+    "ThreadExecutor": "speech_event.adapters.executors",
+    "Timer": "speech_event.ports",
+    "Transcript": "speech_event.ports",
+    "Transport": "speech_event.ports",
+    "WholePhrases": "speech_event.ports",
+    "apply_overrides": "speech_event.config",
+    "engine_builder": "speech_event.recognizers",
+    "load_config": "speech_event.config",
+    "parse_config": "speech_event.config",
+}
 
 __all__ = [
     "RECOGNISE_SPEECH",
@@ -113,3 +172,18 @@ __all__ = [
     "load_config",
     "parse_config",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """The public name ``name``, imported from its module the first time it is asked for."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'speech_event' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> List[str]:
+    """The public names."""
+    return __all__

@@ -1,9 +1,12 @@
 """What a program embedding the node imports from ``speech_event`` itself is enough to run it."""
 
+import subprocess
+import sys
 from typing import List
 
 import speech_event
 from fixtures.audio import speak_tones
+from tests.helpers.paths import ROOT
 
 
 def test_the_package_docstrings_recipe_runs_the_node_with_public_names_only() -> None:
@@ -38,3 +41,14 @@ def test_every_public_name_is_importable_and_listed_once() -> None:
     assert isinstance(
         speech_event.RECOGNIZERS["fake"](speech_event.SpeechEventConfig()), speech_event.Stoppable
     )
+
+
+def test_importing_the_package_imports_no_numpy_so_ros_tools_under_the_system_python_load_its_types() -> None:
+    # rosservice and rostopic import speech_event.srv / .msg under /usr/bin/python3, which may have
+    # no numpy: the package itself must import nothing heavy until a name is used.
+    code = "import sys, speech_event; print(sorted(m for m in ('numpy', 'speech_event.node') if m in sys.modules))"
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    assert result.stdout == "[]\n"
+    assert sorted(speech_event.__all__) == sorted(speech_event._EXPORTS)
