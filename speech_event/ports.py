@@ -86,6 +86,12 @@ class Timer(Protocol):
     def cancel(self) -> None: ...
 
 
+# A timer may fire a little early (RosClock fires 0.1 ms early against nanosecond rounding): a
+# timer that fires within this of its time has come due. Every check "is it time yet?" made from a
+# timer's callback allows for it.
+TIMER_TOLERANCE = 1e-3
+
+
 class Clock(Protocol):
     """The node's time line (ROS time on the robot) and its timers."""
 
@@ -94,7 +100,7 @@ class Clock(Protocol):
         ...
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
-        """Run ``callback`` once when the clock reaches ``when``."""
+        """Run ``callback`` once when the clock reaches ``when`` (up to TIMER_TOLERANCE early)."""
         ...
 
 

@@ -14,11 +14,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from speech_event.config import SpeechEventConfig
-from speech_event.ports import Clock, Timer
-
-# A timer may fire a little early (RosClock fires 0.1 ms early against nanosecond rounding); a
-# timer that fires within this of its time has come due, rather than being set again.
-TIMER_TOLERANCE = 1e-3
+from speech_event.ports import TIMER_TOLERANCE, Clock, Timer
 
 
 @dataclass

@@ -11,7 +11,8 @@ import pytest
 
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.config import SpeechEventConfig
-from speech_event.turn_taking import TIMER_TOLERANCE, RearmingTimer, TurnTaking
+from speech_event.ports import TIMER_TOLERANCE
+from speech_event.turn_taking import RearmingTimer, TurnTaking
 
 # -- RearmingTimer ----------------------------------------------------------------------------------
 

@@ -301,7 +301,7 @@ class RosTransport:
 
 # Time arithmetic rounds to the nanosecond both ways, so a timer due exactly when /clock is
 # stepped could miss that step by 1 ns. Timers fire this much early (within the node's
-# TIMER_TOLERANCE (speech_event/turn_taking.py), so the node takes them as due).
+# TIMER_TOLERANCE (speech_event/ports.py), so the node takes them as due).
 EARLY = 1e-4
 # Longest single wait, so a cancelled timer's thread ends soon after.
 _LONGEST_WAIT = 0.5

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional
 
 from speech_event.messages import RecogniseSpeechFeedback, RecogniseSpeechResult
-from speech_event.ports import ActionGoal, Clock, Timer
+from speech_event.ports import TIMER_TOLERANCE, ActionGoal, Clock, Timer
 from speech_event.topics import SOUND_DETECTION_DOWN
 
 ACTION_NAME = "/speechEvent/recognise_speech_action"
@@ -137,9 +137,10 @@ class ListenAction:
         return goal
 
     def _timed_out(self, goal: _Goal) -> bool:
-        """No speech that started after acceptance is being heard, and the wait is over."""
+        """No speech that started after acceptance is being heard, and the wait is over (the
+        deadline's timer may fire a little early: without the tolerance such a goal never ended)."""
         started = self._collecting_since is not None and self._collecting_since > goal.accepted_at
-        return not started and self._clock.now() >= goal.deadline
+        return not started and self._clock.now() >= goal.deadline - TIMER_TOLERANCE
 
     def _arm(self, goal: _Goal, wait: float) -> None:
         for step in range(1, PROGRESS_STEPS):
