@@ -11,3 +11,8 @@ class ModelError(Exception):
 
 class StorageError(Exception):
     """A storage folder that cannot be made or written: said at start-up, before ROS."""
+
+
+class GrammarError(ModelError):
+    """A grammar that cannot be used (unreadable, malformed, words an engine cannot spell): a
+    ModelError, since wherever an engine is built a grammar it cannot take stops it the same way."""
