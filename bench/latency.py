@@ -45,6 +45,7 @@ from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
 from speech_event.config import SpeechEventConfig
+from speech_event.grammar import load_grammar
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
 from speech_event.ports import Recognizer, Transcript
@@ -116,7 +117,7 @@ def _latency(recognizer: Recognizer, config: SpeechEventConfig, audio: np.ndarra
 
 def _engines(work: Path) -> Dict[str, Tuple[Callable[[], Recognizer], str]]:
     """Every engine, or those whose names hold one of the words given on the command line."""
-    grammar = str(COMMANDS)
+    grammar = load_grammar(COMMANDS)
     engines: Dict[str, Tuple[Callable[[], Recognizer], str]] = {
         "fake (tones)": (ToneRecognizer, "tones"),
         "NeMo engine, tones fixture model": (

@@ -201,7 +201,7 @@ def engines_on_roscore(environment: Dict[str, str], runs: int = 2) -> None:
     engines = [
         ("fake (tones)", "fake", "", "tones"),
         ("NeMo engine, tones fixture model", "nemo", f"en_model_path {tones}\n", "tones"),
-        ("pocketsphinx grammar", "pocketsphinx", f"pocketsphinx_grammar {grammar}\n", "tts"),
+        ("pocketsphinx grammar", "pocketsphinx", f"grammar {grammar}\n", "tts"),
         ("pocketsphinx language model", "pocketsphinx", "", "tts"),
     ]
     large = os.environ.get("SPEECH_EVENT_LARGE_MODEL")  # see bench/latency.py

@@ -56,6 +56,12 @@ def _tones_tdt_model() -> Path:
     return tones_tdt_model_directory()
 
 
+def _tones_ctc_model() -> Path:
+    from fixtures.tones_model import tones_ctc_model_directory
+
+    return tones_ctc_model_directory()
+
+
 def _whisper_tones_model() -> Path:
     from fixtures.whisper_tones_model import whisper_tones_model_directory
 
@@ -73,12 +79,14 @@ class FixtureModel:
 
 FIXTURE_MODEL = "fixture-model"
 FIXTURE_PARAKEET = "fixture-parakeet"
+FIXTURE_CTC = "fixture-ctc"
 FIXTURE_WHISPER = "fixture-whisper"
-# The tones models: the conformer-transducer's RNN-T and the parakeet family's TDT format
+# The tones models: the conformer-transducer's RNN-T and the parakeet family's TDT and CTC formats
 # (fixtures/tones_model.py), and a Whisper model (fixtures/whisper_tones_model.py).
 FIXTURE_MODELS: Dict[str, FixtureModel] = {
     FIXTURE_MODEL: FixtureModel("nemo", CONFORMER_TRANSDUCER, _tones_model),
     FIXTURE_PARAKEET: FixtureModel("nemo", PARAKEET, _tones_tdt_model),
+    FIXTURE_CTC: FixtureModel("nemo", PARAKEET, _tones_ctc_model),
     FIXTURE_WHISPER: FixtureModel("whisper", WHISPER, _whisper_tones_model),
 }
 RECOGNIZERS = (*ENGINES, *FIXTURE_MODELS)

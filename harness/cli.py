@@ -93,12 +93,8 @@ def _run(arguments: argparse.Namespace) -> int:
 def _demo(arguments: argparse.Namespace) -> int:
     config = _base_config(arguments.config)
     uses_pocketsphinx = arguments.recognizer in ("auto", "pocketsphinx") and not config.en_model_path
-    if (
-        uses_pocketsphinx
-        and arguments.grammar
-        and not (config.pocketsphinx_grammar or config.pocketsphinx_keywords)
-    ):
-        config = dataclasses.replace(config, pocketsphinx_grammar=arguments.grammar)
+    if uses_pocketsphinx and arguments.grammar and not (config.grammar or config.pocketsphinx_keywords):
+        config = dataclasses.replace(config, grammar=arguments.grammar)
     problem = VOICES[arguments.voice].problem_with(arguments.text)
     if problem:
         raise ScenarioError(f"demo text {arguments.text!r}: the {arguments.voice} voice {problem}")
@@ -111,7 +107,7 @@ def _demo(arguments: argparse.Namespace) -> int:
         voice=arguments.voice,
         recognizer=arguments.recognizer,
     )
-    mode = f", grammar {config.pocketsphinx_grammar}" if config.pocketsphinx_grammar else ""
+    mode = f", grammar {config.grammar}" if config.grammar else ""
     print(
         f"soundDetection says {arguments.text!r} "
         f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)\n"

@@ -70,13 +70,21 @@ class Language:
 
 
 @dataclass(frozen=True)
+class SetGrammar:
+    """A set_grammar call with this request (phrases parted by |, a file next to the scenario, or ""
+    for free speech); takes no scenario time."""
+
+    request: str
+
+
+@dataclass(frozen=True)
 class Listen:
     """A recognise_speech goal with this wait; takes no scenario time (later steps run meanwhile)."""
 
     wait: float
 
 
-Step = Union[Say, Silence, Noise, Malformed, Outage, Enable, Language, Listen]
+Step = Union[Say, Silence, Noise, Malformed, Outage, Enable, Language, SetGrammar, Listen]
 
 
 @dataclass(frozen=True)
@@ -115,6 +123,7 @@ _STEP_KEYS = {
     "outage": ("outage", "kind"),
     "enable": ("enable",),
     "language": ("language",),
+    "grammar": ("grammar",),
     "listen": ("listen",),
 }
 
@@ -197,6 +206,8 @@ def _step(table: Any, where: str) -> Step:
         return Enable(reader.get("enable", str))
     if kind == "language":
         return Language(reader.get("language", str))
+    if kind == "grammar":
+        return SetGrammar(reader.get("grammar", str))
     if kind == "listen":
         return Listen(reader.seconds("listen", allow_zero=True))
     return Outage(reader.seconds("outage"), reader.choice("kind", OUTAGE_KINDS, "shutdown"))
@@ -214,7 +225,10 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
     except ConfigError as config_error:
         raise ScenarioError(str(config_error)) from None
     steps_table = top.get("steps", list)
-    steps = tuple(_step(table, f"{source}: steps[{number}]") for number, table in enumerate(steps_table))
+    steps = tuple(
+        _next_to(_step(table, f"{source}: steps[{number}]"), source)
+        for number, table in enumerate(steps_table)
+    )
     expect = _Reader(top.get("expect", dict), source + ": [expect]", ("published", "responses", "results"))
     published = expect.get("published", list)
     if not all(isinstance(text, str) for text in published):
@@ -240,6 +254,17 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         background_noise_db=None if noise_db is None else float(noise_db),
         seed=int(top.get("seed", int, 0)),
     )
+
+
+def _next_to(step: Step, source: str) -> Step:
+    """A grammar step's file is found next to the scenario, as its [config] files are."""
+    if (
+        isinstance(step, SetGrammar)
+        and "|" not in step.request
+        and (Path(source).parent / step.request).is_file()
+    ):
+        return SetGrammar(str(Path(source).parent / step.request))
+    return step
 
 
 def load_scenario(path: Union[str, Path], base_config: SpeechEventConfig) -> Scenario:

@@ -14,12 +14,24 @@ import numpy as np
 from fixtures.audio import noise
 from fixtures.malformed import BLOCK_SAMPLES, malformed_message
 from harness.catalog import VOICES
-from harness.scenario import Enable, Language, Listen, Malformed, Noise, Outage, Say, Scenario, Silence
-from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from harness.scenario import (
+    Enable,
+    Language,
+    Listen,
+    Malformed,
+    Noise,
+    Outage,
+    Say,
+    Scenario,
+    SetGrammar,
+    Silence,
+)
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     Float32MultiArray,
     RecogniseSpeechGoal,
     SetEnabledRequest,
+    SetGrammarRequest,
     SetLanguageRequest,
 )
 
@@ -47,7 +59,7 @@ class ComeUp:
 @dataclass(frozen=True)
 class CallService:
     time: float
-    service: str  # SET_ENABLED_SERVICE or SET_LANGUAGE_SERVICE
+    service: str  # SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE or SET_GRAMMAR_SERVICE
     request: object
 
 
@@ -111,6 +123,8 @@ def build_timeline(scenario: Scenario) -> Timeline:
             events.append(CallService(time, SET_ENABLED_SERVICE, SetEnabledRequest(step.request)))
         elif isinstance(step, Language):
             events.append(CallService(time, SET_LANGUAGE_SERVICE, SetLanguageRequest(step.request)))
+        elif isinstance(step, SetGrammar):
+            events.append(CallService(time, SET_GRAMMAR_SERVICE, SetGrammarRequest(step.request)))
         elif isinstance(step, Listen):
             events.append(SendGoal(time, RecogniseSpeechGoal(step.wait)))
             last_deadline = max(last_deadline, time + step.wait)

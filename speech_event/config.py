@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Mapping, Optional, Union
 
 from speech_event.errors import ConfigError
-from speech_event.keyvalue import KeyRule, KeyValueFormat, boolean, choice, number, seconds, text
+from speech_event.keyvalue import KeyRule, KeyValueFormat, boolean, choice, number, optional, seconds, text
 
 __all__ = [
     "ConfigError",
@@ -49,9 +49,14 @@ class SpeechEventConfig:
     confidence: float = 0.0
     # Period of the "still running" info line in verbose mode; 0 turns it off.
     heartbeat_msg_period: float = 10.0
-    # The embedded English engine (pocketsphinx): empty for its language model, or a command
-    # grammar (a JSGF file or a list of phrases), or a keyword list.
-    pocketsphinx_grammar: str = ""
+    # A command grammar for every engine (speech_event/grammar.py: a JSGF file or a file of
+    # phrases; empty: free speech). Its earlier name pocketsphinx_grammar is an alias.
+    grammar: str = ""
+    # Speech is taken as a phrase of the grammar only when the best phrase is at most this much
+    # less likely than the engine's own free decoding (docs/grammar.md); None: the engine's own
+    # measured default (its unit is the engine's: nats for NeMo and Whisper).
+    grammar_threshold: Optional[float] = None
+    # pocketsphinx only: a keyword list instead of a grammar or its language model.
     pocketsphinx_keywords: str = ""
     # The robot's model family for the NeMo-format engines (rw_model_path, en_model_path).
     model: str = "conformer-transducer"
@@ -105,6 +110,8 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"speculation_gap ({config.speculation_gap} s) to less than speech_pause_period "
             f"({config.speech_pause_period} s)"
         )
+    if config.grammar and config.pocketsphinx_keywords:
+        return "set grammar (pocketsphinx_grammar) or pocketsphinx_keywords, not both"
     if config.min_utterance_length > config.max_utterance_length:
         return (
             f"min_utterance_length {config.min_utterance_length} s is longer than max_utterance_length "
@@ -118,7 +125,7 @@ PATH_KEYS = (
     "rw_model_path",
     "en_model_path",
     "audio_storage_dir",
-    "pocketsphinx_grammar",
+    "grammar",
     "pocketsphinx_keywords",
 )
 
@@ -142,8 +149,10 @@ _FORMAT = KeyValueFormat(
         "max_message_length": seconds(0.1, 3600.0),
         "confidence": KeyRule(number(float, 0.0, 1.0), "a number from 0 to 1"),
         "heartbeat_msg_period": seconds(0.0, 3600.0),
-        "pocketsphinx_grammar": KeyRule(
-            text, "a JSGF file or a file of phrases, one a line; empty: language model"
+        "grammar": KeyRule(text, "a JSGF file or a file of phrases, one a line; empty: free speech"),
+        "grammar_threshold": KeyRule(
+            optional(number(float, -(10.0**6), 0.0)),
+            "a log-likelihood ratio, 0 or less, or nothing for the engine's default",
         ),
         "pocketsphinx_keywords": KeyRule(text, "a keyword list file (pocketsphinx kws format); empty: none"),
         "model": KeyRule(choice(*MODEL_FAMILIES), " or ".join(MODEL_FAMILIES)),
@@ -161,6 +170,8 @@ _FORMAT = KeyValueFormat(
         "interUtteranceLen": "speech_pause_period",
         "maxUtteranceLen": "max_utterance_length",
         "minUtteranceLen": "min_utterance_length",
+        # The key's name before every engine took a grammar.
+        "pocketsphinx_grammar": "grammar",
     },
     check=_together,
 )

@@ -2,10 +2,11 @@
 
 Each text published on /speechEvent/text is shown with its time, in a font readable across a
 room, errors in red, newest at the bottom and kept in view. A status line says what the node is
-doing: from its /diagnostics (disabled, soundDetection down, transcribing) and from the audio on
-/soundDetection/signal (hearing speech). A text box publishes a typed line on /speechEvent/text
-as if it had been recognised (demos without a microphone); a language switch and an
-enable/disable toggle call the node's services where it offers them.
+doing: from its /diagnostics (disabled, soundDetection down, transcribing, and the grammar in force
+when there is one) and from the audio on /soundDetection/signal (hearing speech). A text box
+publishes a typed line on /speechEvent/text as if it had been recognised (demos without a
+microphone); a language switch and an enable/disable toggle call the node's services where it
+offers them.
 
 It talks only through the project's ports (Transport, and a service caller), so it runs on the
 in-memory bus and on ROS alike. Transport callbacks come on other threads (rospy's); they queue
@@ -19,7 +20,7 @@ import tkinter as tk
 from typing import Callable, List, Optional, Tuple
 
 from speech_event.application import without_remappings
-from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC
+from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, FREE_SPEECH
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     SET_ENABLED,
@@ -58,6 +59,15 @@ def status_of(diagnostics: Optional[DiagnosticArray]) -> str:
     if values.get("utterances waiting for recognition", "0") != "0" or status.level == DiagnosticStatus.WARN:
         return "transcribing"
     return "listening"
+
+
+def grammar_in(diagnostics: Optional[DiagnosticArray]) -> Optional[str]:
+    """The grammar in force, from the node's last diagnostics; None for free speech or not known."""
+    if diagnostics is None or not diagnostics.status:
+        return None
+    values = {pair.key: pair.value for pair in diagnostics.status[0].values}
+    grammar = values.get("grammar")
+    return None if grammar in (None, FREE_SPEECH) else grammar
 
 
 class TranscriptWindow:
@@ -130,7 +140,8 @@ class TranscriptWindow:
         status = status_of(self._diagnostics)
         if status == "listening" and self._clock() - self._last_block < HEARING_SECONDS:
             status = "hearing speech"
-        self.status.configure(text=status)
+        grammar = grammar_in(self._diagnostics)
+        self.status.configure(text=status if grammar is None else f"{status} · grammar: {grammar}")
 
     def poll(self) -> None:
         self.refresh()

@@ -55,6 +55,15 @@ def choice(*options: str) -> Callable[[object], object]:
 _NUMBER_PATTERNS = {int: r"[-+]?\d+", float: r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"}
 
 
+def optional(parse: Callable[[object], object]) -> Callable[[object], object]:
+    """``parse``, or None for an empty value (the key's default is then decided elsewhere)."""
+
+    def parse_or_none(value: object) -> object:
+        return None if value is None or value == "" else parse(value)
+
+    return parse_or_none
+
+
 def number(kind: type, low: float, high: float) -> Callable[[object], object]:
     """A parser of a ``kind`` (int or float) number from ``low`` to ``high``; no nan, inf or bool."""
 
@@ -194,6 +203,8 @@ class KeyValueFormat(Generic[Config]):
         """The text of a file that ``parse`` reads back as ``config``."""
 
         def written(value: object) -> str:
+            if value is None:
+                return ""  # an optional key left empty: its default, as ``optional`` reads it
             return str(value).lower() if isinstance(value, bool) else str(value)
 
         return "".join(f"{key} {written(getattr(config, key))}\n" for key in self._rules)

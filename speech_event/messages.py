@@ -49,7 +49,7 @@ def message_type_name(message: object) -> str:
     return str(getattr(message, "_type", type(message).__name__))
 
 
-# -- the services the Behaviour Controller calls (srv/SetEnabled.srv, srv/SetLanguage.srv) ---------
+# -- the services the Behaviour Controller calls (srv/SetEnabled.srv, SetLanguage.srv, SetGrammar.srv)
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,21 @@ class SetLanguageResponse:
 
 
 @dataclass(frozen=True)
+class SetGrammarRequest:
+    """The request of speech_event/SetGrammar (srv/SetGrammar.srv): ``grammar``, a file, phrases
+    parted by |, or empty for free speech."""
+
+    grammar: str = ""
+
+
+@dataclass(frozen=True)
+class SetGrammarResponse:
+    """The response of speech_event/SetGrammar: 1 accepted, 0 rejected."""
+
+    response: int = 0  # int8: 1 accepted, 0 rejected
+
+
+@dataclass(frozen=True)
 class ServiceType:
     """A service definition: the ROS type name and the request and response classes."""
 
@@ -91,6 +106,7 @@ class ServiceType:
 
 SET_ENABLED = ServiceType("speech_event/SetEnabled", SetEnabledRequest, SetEnabledResponse)
 SET_LANGUAGE = ServiceType("speech_event/SetLanguage", SetLanguageRequest, SetLanguageResponse)
+SET_GRAMMAR = ServiceType("speech_event/SetGrammar", SetGrammarRequest, SetGrammarResponse)
 
 
 # -- the action (action/RecogniseSpeech.action) ----------------------------------------------------

@@ -16,9 +16,12 @@ import functools
 import logging
 import threading
 import time
-from typing import Callable, Dict, Optional
+from pathlib import Path
+from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.config import SpeechEventConfig
+from speech_event.errors import ConfigError, GrammarError
+from speech_event.grammar import Grammar, load_grammar
 from speech_event.health import Health
 from speech_event.interfaces.action import ACTION_NAME, DISABLED, ListenAction
 from speech_event.interfaces.diagnostics import (
@@ -28,9 +31,15 @@ from speech_event.interfaces.diagnostics import (
     NodeStatistics,
 )
 from speech_event.interfaces.language_engines import EngineBuilder, LanguageEngines
-from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE, RuntimeControl
+from speech_event.interfaces.services import (
+    SET_ENABLED_SERVICE,
+    SET_GRAMMAR_SERVICE,
+    SET_LANGUAGE_SERVICE,
+    RuntimeControl,
+    cannot_use,
+)
 from speech_event.interfaces.storage import store_for
-from speech_event.messages import RECOGNISE_SPEECH, SET_ENABLED, SET_LANGUAGE, Float32MultiArray
+from speech_event.messages import RECOGNISE_SPEECH, SET_ENABLED, SET_GRAMMAR, SET_LANGUAGE, Float32MultiArray
 from speech_event.pipeline.assembly import UtteranceAssembler
 from speech_event.pipeline.publication import Publication
 from speech_event.pipeline.recognition import Recognition
@@ -63,7 +72,8 @@ class SpeechEventNode:
     ) -> None:
         """``recognizer`` transcribes ``config.language``; ``build_engine`` builds another language's
         engine when set_language asks for it (without it, only the configured language is served).
-        ``screen`` decides what is not speech (default: built from the configuration)."""
+        ``screen`` decides what is not speech (default: built from the configuration). ConfigError
+        when the configured grammar cannot be read or the engine cannot take it."""
         self._config = config
         self._transport = transport
         self._clock = clock
@@ -83,16 +93,18 @@ class SpeechEventNode:
         self._publication = Publication(config, self._statistics, self._action, self._store)
         self._control = RuntimeControl(
             LanguageEngines(config.language, recognizer, build_engine),
-            lambda: self._language,
+            self._in_force,
             self.set_enabled,
             self._use_engine,
+            self._use_grammar,
         )
         # The subscriber callback, the clock's timers, the service handlers and the recognition
         # worker may each run on their own thread (rospy); this lock guards the assembler, the
-        # rules' state, the engine in use and the enabled flag.
+        # rules' state, the engine and grammar in use and the enabled flag.
         self._lock = threading.Lock()
         self._language = config.language
         self._recognizer = recognizer
+        self._grammar = _configured_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
         self._turn = TurnTaking(config, clock, self._lock, self._close_utterance, self._maybe_speculate)
@@ -139,6 +151,12 @@ class SpeechEventNode:
             return self._language
 
     @property
+    def grammar(self) -> Optional[Grammar]:
+        """The grammar in force now (set_grammar); None for free speech."""
+        with self._lock:
+            return self._grammar
+
+    @property
     def enabled(self) -> bool:
         """Whether the node transcribes now (set_enabled)."""
         with self._lock:
@@ -150,6 +168,7 @@ class SpeechEventNode:
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)
         self._transport.serve(SET_ENABLED_SERVICE, SET_ENABLED, self._control.on_set_enabled)
         self._transport.serve(SET_LANGUAGE_SERVICE, SET_LANGUAGE, self._control.on_set_language)
+        self._transport.serve(SET_GRAMMAR_SERVICE, SET_GRAMMAR, self._control.on_set_grammar)
         self._transport.serve_action(
             ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel
         )
@@ -219,7 +238,7 @@ class SpeechEventNode:
         if not (collecting and self._speculation.may_start(self._recognizer, idle)):
             return
         audio = self._assembler.peek()
-        speculation = self._speculation.start(audio.size, self._recognizer)
+        speculation = self._speculation.start(audio.size, self._recognizer, self._grammar)
         speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
 
     def _speculate(self, speculation: Speculation, audio: Audio) -> None:
@@ -228,7 +247,7 @@ class SpeechEventNode:
             if speculation.cancelled:
                 return
             speculation.running = True
-        outcome = self._recognition(audio, speculation.recognizer)
+        outcome = self._recognition(audio, speculation.recognizer, speculation.grammar)
         with self._lock:
             job = self._speculation.finished(speculation, outcome)
             if job is None:
@@ -247,7 +266,9 @@ class SpeechEventNode:
         seconds = audio.size / self._config.sample_rate
         self._statistics.queued(seconds)
         self._action.utterance_closed(number, started_at, more_follows)
-        job = RecognitionJob(number, started_at, closed_at, audio, recognizer, self._language, seconds)
+        job = RecognitionJob(
+            number, started_at, closed_at, audio, recognizer, self._language, seconds, self._grammar
+        )
         speculation = self._speculation.adopt(job)
         if speculation is not None:
             if speculation.outcome is None:  # still running: its recognition starts now, as it were
@@ -274,7 +295,7 @@ class SpeechEventNode:
             self._running = job
             watchdog = self._watchdog.watch(job)
         try:
-            self._publication.conclude(job, self._recognition(job.audio, job.recognizer))
+            self._publication.conclude(job, self._recognition(job.audio, job.recognizer, job.grammar))
         finally:
             with self._lock:
                 self._running = None
@@ -314,6 +335,17 @@ class SpeechEventNode:
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 
+    def _use_grammar(self, grammar: Optional[Grammar]) -> None:
+        with self._lock:  # utterances closed before this finish with the old grammar
+            self._speculation.drop()
+            self._grammar = grammar
+        _LOG.info("speechEvent grammar: %s", "none (free speech)" if grammar is None else grammar.source)
+
+    def _in_force(self) -> Tuple[str, Recognizer, Optional[Grammar]]:
+        """The language, engine and grammar in use now."""
+        with self._lock:
+            return self._language, self._recognizer, self._grammar
+
     def _refusal(self) -> Optional[str]:
         """Why an action goal cannot listen now, or None."""
         if not self.enabled:
@@ -333,6 +365,7 @@ class SpeechEventNode:
             return NodeState(
                 engine=type(self._recognizer).__name__,
                 language=self._language,
+                grammar="" if self._grammar is None else self._grammar.source,
                 enabled=self._enabled,
                 sound_detection=sound_detection,
                 rejected={reason.value: count for reason, count in self._rejections.counts.items()},
@@ -342,3 +375,17 @@ class SpeechEventNode:
                 queued_seconds=self._queue.seconds,
                 dropped=self._queue.dropped,
             )
+
+
+def _configured_grammar(config: SpeechEventConfig, recognizer: Recognizer) -> Optional[Grammar]:
+    """The ``grammar`` key's grammar, checked against the engine; None for free speech."""
+    if not config.grammar:
+        return None
+    try:
+        grammar = load_grammar(Path(config.grammar))
+    except GrammarError as problem:
+        raise ConfigError(f"grammar: {problem}") from None
+    reason = cannot_use(recognizer, grammar)
+    if reason is not None:
+        raise ConfigError(f"grammar {config.grammar}: {reason}")
+    return grammar

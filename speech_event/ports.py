@@ -2,7 +2,7 @@
 
 Adapters implement these: the in-memory bus and the rospy transport, the fake and ROS clocks,
 the recognition engines and their fakes, the simulated and threaded workers. What only some
-engines can do is a Protocol of its own (``Stoppable``, ``WholePhrases``), checked with
+engines can do is a Protocol of its own (``Stoppable``, ``Grammars``), checked with
 ``isinstance``: an engine has the ability by having its method.
 """
 
@@ -13,6 +13,7 @@ from typing import Callable, Optional, Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from speech_event.grammar import Grammar
 from speech_event.messages import ActionType, ServiceType
 
 
@@ -131,6 +132,9 @@ class Transcript:
     text: str
     # In [0, 1] when the engine reports one; None when it does not.
     confidence: Optional[float] = None
+    # With a grammar in force: the grammar's best phrase when the speech was judged to be none of
+    # its phrases (the text is then empty), for the log and the out-of-grammar count.
+    rejected: Optional[str] = None
 
 
 class Recognizer(Protocol):
@@ -157,10 +161,15 @@ class Stoppable(Protocol):
 
 
 @runtime_checkable
-class WholePhrases(Protocol):
-    """An engine that may be set to answer only with whole phrases of a grammar."""
+class Grammars(Protocol):
+    """An engine that decodes within a command grammar: with one in force, every text it gives is a
+    whole phrase of it, and speech that is none of its phrases gives no text (``rejected``)."""
 
-    @property
-    def whole_phrases(self) -> bool:
-        """Whether every text it gives now is a whole phrase (a complete answer: early end of turn)."""
+    def check_grammar(self, grammar: Grammar) -> None:
+        """GrammarError saying why this engine cannot use ``grammar`` (words it cannot spell, a
+        grammar of too many sentences), before anything is switched."""
+        ...
+
+    def use_grammar(self, grammar: Optional[Grammar]) -> None:
+        """Decode within ``grammar`` from the next ``transcribe`` on; None: free speech again."""
         ...

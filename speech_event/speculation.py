@@ -17,8 +17,9 @@ from dataclasses import dataclass
 from typing import FrozenSet, Optional
 
 from speech_event.config import SpeechEventConfig
+from speech_event.grammar import Grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
-from speech_event.ports import Cancellable, Recognizer, Stoppable, Timer, Transcript, WholePhrases
+from speech_event.ports import Cancellable, Recognizer, Stoppable, Timer, Transcript
 
 
 @dataclass
@@ -31,13 +32,15 @@ class SpeculationCounts:
 
 
 class Speculation:
-    """One speculation: the first ``samples`` of the utterance being collected, with one engine.
+    """One speculation: the first ``samples`` of the utterance being collected, with one engine
+    and the grammar in force (None: free speech).
 
     Every field is read and written under the node's lock."""
 
-    def __init__(self, samples: int, recognizer: Recognizer) -> None:
+    def __init__(self, samples: int, recognizer: Recognizer, grammar: Optional[Grammar]) -> None:
         self.samples = samples
         self.recognizer = recognizer
+        self.grammar = grammar
         self.handle: Optional[Cancellable] = None
         self.running = False
         self.cancelled = False
@@ -46,10 +49,15 @@ class Speculation:
         self.adopted: Optional[RecognitionJob] = None
         self.watchdog: Optional[Timer] = None  # recognition_timeout, once adopted while running
 
-    def is_for(self, samples: int, recognizer: Recognizer) -> bool:
-        """Whether a closed utterance of ``samples`` samples, bound to ``recognizer``, is exactly the
-        audio this speculation transcribes."""
-        return not self.cancelled and self.samples == samples and self.recognizer is recognizer
+    def is_for(self, job: RecognitionJob) -> bool:
+        """Whether a closed utterance is exactly the audio this speculation transcribes, for the
+        same engine and grammar."""
+        return (
+            not self.cancelled
+            and self.samples == job.audio.size
+            and self.recognizer is job.recognizer
+            and self.grammar == job.grammar
+        )
 
     def cancel(self) -> None:
         """Superseded: never run it, or stop it where the engine allows."""
@@ -79,9 +87,9 @@ class SpeculationRules:
         heard before), only while the worker is idle (closed utterances first), one at a time."""
         return self._wanted and isinstance(recognizer, Stoppable) and worker_idle and self.current is None
 
-    def start(self, samples: int, recognizer: Recognizer) -> Speculation:
+    def start(self, samples: int, recognizer: Recognizer, grammar: Optional[Grammar]) -> Speculation:
         """Speculate on the first ``samples`` of the utterance being collected."""
-        self.current = Speculation(samples, recognizer)
+        self.current = Speculation(samples, recognizer, grammar)
         self.counts.started += 1
         return self.current
 
@@ -109,7 +117,7 @@ class SpeculationRules:
         speculation = self.current
         if speculation is None or speculation.adopted is not None:
             return None
-        if not speculation.is_for(job.audio.size, job.recognizer):
+        if not speculation.is_for(job):
             self.drop()
             return None
         speculation.adopted = job
@@ -136,15 +144,14 @@ class SpeculationRules:
 
     def ends_turn(self, speculation: Speculation) -> bool:
         """Whether a finished speculation, not adopted, is a complete answer (remembered for the
-        next one): in grammar mode any text, else one of complete_answers or the same text as
+        next one): with a grammar in force any text (every engine that takes a grammar answers
+        with whole phrases of it, or nothing), else one of complete_answers or the same text as
         the speculation before it on this utterance."""
         if speculation.cancelled or speculation.adopted is not None or speculation.outcome is None:
             return False
         answer = speculation.outcome.answer
         text = answer.text if isinstance(answer, Transcript) else ""
-        recognizer = speculation.recognizer
-        grammar_mode = isinstance(recognizer, WholePhrases) and recognizer.whole_phrases
-        complete = is_complete(text, self._last_text, grammar_mode, self._answers)
+        complete = is_complete(text, self._last_text, speculation.grammar is not None, self._answers)
         self._last_text = text.strip().lower()  # as is_complete compares it
         return complete
 

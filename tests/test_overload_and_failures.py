@@ -36,7 +36,7 @@ class Answering(SpyRecognizer):
         ("go left", "the engine answered 'go left', not a Transcript with text"),
         (
             Transcript(5),  # type: ignore[arg-type]
-            "the engine answered Transcript(text=5, confidence=None), not a Transcript with text",
+            "the engine answered Transcript(text=5, confidence=None, rejected=None), not a Transcript with text",
         ),
         (Transcript("go", 1.5), "the engine reported confidence 1.5; allowed: a number from 0 to 1 or none"),
         (

@@ -37,7 +37,7 @@ def test_every_public_name_is_importable_and_listed_once() -> None:
     assert {"Executor", "InMemoryBus", "FakeClock", "SystemClock", "ClockExecutor", "ThreadExecutor"} <= set(
         names
     )
-    assert {"RECOGNIZERS", "Float32MultiArray", "String", "Stoppable", "WholePhrases"} <= set(names)
+    assert {"RECOGNIZERS", "Float32MultiArray", "String", "Stoppable", "Grammars", "Grammar"} <= set(names)
     assert isinstance(
         speech_event.RECOGNIZERS["fake"](speech_event.SpeechEventConfig()), speech_event.Stoppable
     )

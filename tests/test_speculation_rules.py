@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from speech_event.config import SpeechEventConfig
+from speech_event.grammar import Grammar, requested_grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.screen import Discard
-from speech_event.ports import Recognizer, Stoppable, Transcript, WholePhrases
+from speech_event.ports import Recognizer, Stoppable, Transcript
 from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules, is_complete
 from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
@@ -17,16 +18,7 @@ CONFIG = SpeechEventConfig(speculative_recognition=True, complete_answers="yes,n
 NO_ANSWERS = dataclasses.replace(CONFIG, complete_answers="")
 
 
-class GrammarRecognizer(StoppableRecognizer):
-    """An engine that may be set to whole phrases of a grammar."""
-
-    def __init__(self, whole_phrases: bool) -> None:
-        super().__init__()
-        self._whole_phrases = whole_phrases
-
-    @property
-    def whole_phrases(self) -> bool:
-        return self._whole_phrases
+COMMANDS = requested_grammar("go to the kitchen|stop")
 
 
 class Handle:
@@ -47,9 +39,11 @@ class Timer:
         self.cancels += 1
 
 
-def _job(samples: int, recognizer: Recognizer, number: int = 1) -> RecognitionJob:
+def _job(
+    samples: int, recognizer: Recognizer, number: int = 1, grammar: Optional[Grammar] = None
+) -> RecognitionJob:
     return RecognitionJob(
-        number, 0.0, 1.0, np.zeros(samples, dtype=np.float32), recognizer, "english", samples / 16000
+        number, 0.0, 1.0, np.zeros(samples, dtype=np.float32), recognizer, "english", samples / 16000, grammar
     )
 
 
@@ -62,7 +56,7 @@ def _speculating(running: bool = True) -> Tuple[SpeculationRules, StoppableRecog
     ``running``: the worker has started it."""
     rules = SpeculationRules(CONFIG)
     engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    speculation = rules.start(4096, engine, None)
     speculation.running = running
     return rules, engine, speculation
 
@@ -70,8 +64,6 @@ def _speculating(running: bool = True) -> Tuple[SpeculationRules, StoppableRecog
 def test_the_fakes_have_the_abilities_they_are_named_for() -> None:
     assert isinstance(StoppableRecognizer(), Stoppable)
     assert not isinstance(SpyRecognizer(), Stoppable)
-    assert isinstance(GrammarRecognizer(True), WholePhrases)
-    assert not isinstance(StoppableRecognizer(), WholePhrases)
 
 
 # -- may_start and start ----------------------------------------------------------------------------
@@ -92,7 +84,7 @@ def test_no_speculation_while_the_worker_is_busy() -> None:
 def test_no_speculation_while_another_one_is_there() -> None:
     rules = SpeculationRules(CONFIG)
     engine = StoppableRecognizer()
-    rules.start(4096, engine)
+    rules.start(4096, engine, None)
     assert not rules.may_start(engine, worker_idle=True)
 
 
@@ -104,7 +96,7 @@ def test_no_speculation_when_speculative_recognition_is_off() -> None:
 def test_start_makes_the_current_speculation_and_counts_it() -> None:
     rules = SpeculationRules(CONFIG)
     engine = StoppableRecognizer()
-    speculation = rules.start(4096, engine)
+    speculation = rules.start(4096, engine, None)
     assert rules.current is speculation
     assert (speculation.samples, speculation.recognizer) == (4096, engine)
     assert (speculation.running, speculation.cancelled) == (False, False)
@@ -120,24 +112,27 @@ def test_start_makes_the_current_speculation_and_counts_it() -> None:
 # -- Speculation ----------------------------------------------------------------------------------
 
 
-def test_a_speculation_is_for_exactly_its_audio_and_engine() -> None:
+def test_a_speculation_is_for_exactly_its_audio_engine_and_grammar() -> None:
     engine = StoppableRecognizer()
-    speculation = Speculation(4096, engine)
-    assert speculation.is_for(4096, engine)
-    assert not speculation.is_for(4097, engine)
-    assert not speculation.is_for(4096, StoppableRecognizer())
+    speculation = Speculation(4096, engine, COMMANDS)
+    assert speculation.is_for(_job(4096, engine, grammar=COMMANDS))
+    assert speculation.is_for(_job(4096, engine, grammar=requested_grammar("go to the kitchen|stop")))
+    assert not speculation.is_for(_job(4097, engine, grammar=COMMANDS))
+    assert not speculation.is_for(_job(4096, StoppableRecognizer(), grammar=COMMANDS))
+    assert not speculation.is_for(_job(4096, engine, grammar=None))
+    assert not speculation.is_for(_job(4096, engine, grammar=requested_grammar("yes|no")))
 
 
 def test_a_cancelled_speculation_is_for_nothing() -> None:
     engine = StoppableRecognizer()
-    speculation = Speculation(4096, engine)
+    speculation = Speculation(4096, engine, None)
     speculation.cancel()
-    assert not speculation.is_for(4096, engine)
+    assert not speculation.is_for(_job(4096, engine))
 
 
 def test_cancelling_a_speculation_not_yet_run_cancels_its_job_and_stops_no_engine() -> None:
     engine = StoppableRecognizer()
-    speculation = Speculation(4096, engine)
+    speculation = Speculation(4096, engine, None)
     speculation.handle = handle = Handle()
     speculation.cancel()
     assert speculation.cancelled
@@ -147,7 +142,7 @@ def test_cancelling_a_speculation_not_yet_run_cancels_its_job_and_stops_no_engin
 
 def test_cancelling_a_running_speculation_stops_its_engine() -> None:
     engine = StoppableRecognizer()
-    speculation = Speculation(4096, engine)
+    speculation = Speculation(4096, engine, None)
     speculation.handle = handle = Handle()
     speculation.running = True
     speculation.cancel()
@@ -156,7 +151,7 @@ def test_cancelling_a_running_speculation_stops_its_engine() -> None:
 
 
 def test_cancelling_a_running_speculation_on_an_engine_that_cannot_stop_lets_it_run() -> None:
-    speculation = Speculation(4096, SpyRecognizer())
+    speculation = Speculation(4096, SpyRecognizer(), None)
     speculation.running = True
     speculation.cancel()
     assert speculation.cancelled
@@ -301,7 +296,7 @@ def test_wasted_engine_time_adds_up() -> None:
     rules = SpeculationRules(CONFIG)
     engine = StoppableRecognizer()
     for took in (0.25, 0.5):
-        speculation = rules.start(4096, engine)
+        speculation = rules.start(4096, engine, None)
         speculation.running = True
         rules.drop()
         rules.finished(speculation, _said("go", took=took))
@@ -330,10 +325,15 @@ def test_running_for_is_false_for_another_job_or_a_speculation_not_running() -> 
 # -- ends_turn ------------------------------------------------------------------------------------
 
 
-def _speculate(rules: SpeculationRules, engine: Recognizer, outcome: RecognitionOutcome) -> bool:
+def _speculate(
+    rules: SpeculationRules,
+    engine: Recognizer,
+    outcome: RecognitionOutcome,
+    grammar: Optional[Grammar] = None,
+) -> bool:
     """Whether a speculation that ran to its end while its utterance was still being collected
     ends the turn; then the next block drops it, as in the node."""
-    speculation = rules.start(4096, engine)
+    speculation = rules.start(4096, engine, grammar)
     speculation.running = True
     assert rules.finished(speculation, outcome) is None
     ends = rules.ends_turn(speculation)
@@ -342,11 +342,11 @@ def _speculate(rules: SpeculationRules, engine: Recognizer, outcome: Recognition
 
 
 class Said(NamedTuple):
-    """The texts of the speculations on one utterance, each with whether it ends the turn; with
-    ``whole_phrases`` (not None) the engine is one of a grammar, set to whole phrases or not."""
+    """The texts of the speculations on one utterance, each with whether it ends the turn, with
+    ``grammar`` in force (None: free speech)."""
 
     config: SpeechEventConfig
-    whole_phrases: Optional[bool]
+    grammar: Optional[Grammar]
     texts: List[Tuple[str, bool]]
 
 
@@ -365,11 +365,10 @@ ENDS_TURN = {
         NO_ANSWERS, None, [("Go left.", False), ("Go left.", True)]
     ),
     "an_empty_text_never_ends_the_turn_even_twice_or_in_grammar_mode": Said(
-        NO_ANSWERS, True, [("  ", False), ("  ", False)]
+        NO_ANSWERS, COMMANDS, [("  ", False), ("  ", False)]
     ),
-    "in_grammar_mode_any_text_ends_the_turn": Said(NO_ANSWERS, True, [("go to the kitchen", True)]),
-    "an_engine_able_to_but_not_set_to_whole_phrases_is_not_in_grammar_mode": Said(
-        NO_ANSWERS, False, [("go to the kitchen", False)]
+    "with_a_grammar_in_force_any_text_ends_the_turn": Said(
+        NO_ANSWERS, COMMANDS, [("go to the kitchen", True)]
     ),
 }
 
@@ -377,8 +376,10 @@ ENDS_TURN = {
 @pytest.mark.parametrize("said", list(ENDS_TURN.values()), ids=list(ENDS_TURN))
 def test_whether_a_speculations_text_ends_the_turn(said: Said) -> None:
     rules = SpeculationRules(said.config)
-    engine = StoppableRecognizer() if said.whole_phrases is None else GrammarRecognizer(said.whole_phrases)
-    assert [(text, _speculate(rules, engine, _said(text))) for text, _ in said.texts] == said.texts
+    engine = StoppableRecognizer()
+    assert [
+        (text, _speculate(rules, engine, _said(text), said.grammar)) for text, _ in said.texts
+    ] == said.texts
 
 
 def test_is_complete_compares_the_previous_text_as_given() -> None:
@@ -409,13 +410,13 @@ def test_a_failed_or_discarded_speculation_does_not_end_the_turn_and_resets_the_
 def test_a_cancelled_adopted_or_unfinished_speculation_does_not_end_the_turn() -> None:
     rules = SpeculationRules(CONFIG)
     engine = StoppableRecognizer()
-    unfinished = rules.start(4096, engine)
+    unfinished = rules.start(4096, engine, None)
     assert not rules.ends_turn(unfinished)
     adopted = unfinished
     adopted.outcome = _said("yes")
     adopted.adopted = _job(4096, engine)
     assert not rules.ends_turn(adopted)
-    cancelled = Speculation(4096, engine)
+    cancelled = Speculation(4096, engine, None)
     cancelled.outcome = _said("yes")
     cancelled.cancel()
     assert not rules.ends_turn(cancelled)
@@ -425,7 +426,7 @@ def test_a_speculation_that_does_not_count_leaves_the_comparison_as_it_was() -> 
     rules = SpeculationRules(NO_ANSWERS)
     engine = StoppableRecognizer()
     assert not _speculate(rules, engine, _said("go left"))
-    cancelled = Speculation(4096, engine)
+    cancelled = Speculation(4096, engine, None)
     cancelled.outcome = _said("turn right")
     cancelled.cancel()
     assert not rules.ends_turn(cancelled)

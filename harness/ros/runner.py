@@ -46,10 +46,11 @@ from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers
 from speech_event.config import format_config
 from speech_event.interfaces.action import ACTION_NAME
-from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     RECOGNISE_SPEECH,
     SET_ENABLED,
+    SET_GRAMMAR,
     SET_LANGUAGE,
     RecogniseSpeechGoal,
     ServiceType,
@@ -60,7 +61,11 @@ NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"
 STARTUP_TIMEOUT = 60.0
 # Our node sets this to the ROS time it started (its health checks count from there).
 START_TIME_PARAM = "/speechEvent/start_time"
-SERVICES: Dict[str, ServiceType] = {SET_ENABLED_SERVICE: SET_ENABLED, SET_LANGUAGE_SERVICE: SET_LANGUAGE}
+SERVICES: Dict[str, ServiceType] = {
+    SET_ENABLED_SERVICE: SET_ENABLED,
+    SET_LANGUAGE_SERVICE: SET_LANGUAGE,
+    SET_GRAMMAR_SERVICE: SET_GRAMMAR,
+}
 # actionlib's terminal states, as a scenario's results name them.
 GOAL_STATES = {
     GoalStatus.SUCCEEDED: "succeeded",

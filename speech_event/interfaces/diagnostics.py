@@ -18,12 +18,14 @@ STATUS_NAME = "speechEvent"
 # Why an utterance was not transcribed: the node was disabled, and the speech screen's reasons.
 DISCARDED_WHILE_DISABLED = "disabled"
 DISCARDED_BACKLOG = "backlog"  # dropped unrecognized to keep within max_backlog
+FREE_SPEECH = "none (free speech)"  # the "grammar" value when none is in force
 
 
 @dataclass
 class _Counts:
     transcribed: int = 0
     published: int = 0
+    out_of_grammar: int = 0  # speech judged to be no phrase of the grammar in force
     discarded: Dict[str, int] = field(default_factory=dict)
     ignored_while_disabled: int = 0
     recognition_seconds: List[float] = field(default_factory=list)
@@ -41,6 +43,7 @@ class NodeState:
     enabled: bool
     sound_detection: PublisherStatus
     rejected: Dict[str, int]
+    grammar: str = ""  # the grammar in force (its file or phrases); "" for free speech
     clipped: int = 0
     timed_out: int = 0  # recognitions that ran past recognition_timeout
     utterances: int = 0  # closed so far
@@ -75,6 +78,10 @@ class NodeStatistics:
         with self._lock:
             self._counts.published += 1
 
+    def out_of_grammar(self) -> None:
+        with self._lock:
+            self._counts.out_of_grammar += 1
+
     def discarded(self, reason: str) -> None:
         with self._lock:
             self._counts.discarded[reason] = self._counts.discarded.get(reason, 0) + 1
@@ -93,6 +100,8 @@ class NodeStatistics:
                 KeyValue("soundDetection", state.sound_detection.value),
                 KeyValue("utterances transcribed", str(counts.transcribed)),
                 KeyValue("texts published", str(counts.published)),
+                KeyValue("grammar", state.grammar or FREE_SPEECH),
+                KeyValue("utterances out of grammar", str(counts.out_of_grammar)),
             ]
             values += [
                 KeyValue(f"utterances discarded: {reason}", str(counts.discarded.get(reason, 0)))

@@ -60,7 +60,17 @@ class Publication:
             _LOG.info("utterance %d (%.2f s) is not transcribed: %s", number, seconds, discard.value)
         else:
             text = text_to_publish(transcript, self.config)
-            _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
+            if transcript.rejected is not None:
+                self.statistics.out_of_grammar()
+                _LOG.info(
+                    "utterance %d (%.2f s) is no phrase of the grammar (nearest: %r) -> %r",
+                    number,
+                    seconds,
+                    transcript.rejected,
+                    text,
+                )
+            else:
+                _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
             if text is not None:
                 self.publish(text)
                 self.statistics.published()

@@ -1,13 +1,17 @@
 """resample -> screen -> transcribe: one utterance's recognition, run on the worker (for a closed
 utterance or a speculation). It never raises: a failure is part of the outcome, said when the
-utterance is published (a cancelled speculation never is)."""
+utterance is published (a cancelled speculation never is).
+
+The grammar goes to the engine here, on the worker, just before it transcribes: an utterance
+closed before a set_grammar is recognized with the grammar in force when it closed."""
 
 from typing import Callable, Optional
 
+from speech_event.grammar import Grammar
 from speech_event.pipeline.recognition_queue import RecognitionOutcome
 from speech_event.pipeline.resample import resample
 from speech_event.pipeline.screen import SpeechScreen
-from speech_event.ports import Audio, Recognizer
+from speech_event.ports import Audio, Grammars, Recognizer
 
 
 class Recognition:
@@ -18,8 +22,10 @@ class Recognition:
         self._screen = screen
         self._stopwatch = stopwatch
 
-    def __call__(self, audio: Audio, recognizer: Recognizer) -> RecognitionOutcome:
-        """Resample for ``recognizer``, screen, transcribe."""
+    def __call__(
+        self, audio: Audio, recognizer: Recognizer, grammar: Optional[Grammar] = None
+    ) -> RecognitionOutcome:
+        """Resample for ``recognizer``, screen, transcribe within ``grammar`` (None: free speech)."""
         began: Optional[float] = None
         try:
             speech = resample(audio, self._sample_rate, recognizer.sample_rate)
@@ -27,6 +33,8 @@ class Recognition:
             if discard is not None:
                 return RecognitionOutcome(discard=discard)
             began = self._stopwatch()
+            if isinstance(recognizer, Grammars):  # the node never gives a grammar to another engine
+                recognizer.use_grammar(grammar)
             answer = recognizer.transcribe(speech)
             return RecognitionOutcome(answer, took=self._stopwatch() - began)
         # A failed recognition must not stop the node; SystemExit from an engine is a failure like

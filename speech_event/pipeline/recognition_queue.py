@@ -14,6 +14,7 @@ from typing import Deque, List, Optional
 
 import numpy as np
 
+from speech_event.grammar import Grammar
 from speech_event.pipeline.screen import Discard
 from speech_event.ports import Recognizer
 
@@ -42,6 +43,7 @@ class RecognitionJob:
     recognizer: Recognizer  # the engine in use when the utterance closed
     language: str  # the language of that engine
     seconds: float
+    grammar: Optional[Grammar] = None  # the grammar in force when it closed (None: free speech)
 
 
 class RecognitionQueue:

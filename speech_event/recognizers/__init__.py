@@ -4,14 +4,16 @@
 parakeet: the NeMo engine; whisper: the Whisper engine) for the configured language when its path
 is set, otherwise, for English with the default family, the embedded pocketsphinx engine. Engines
 import their runtime only when chosen, so the node itself needs neither onnxruntime nor pocketsphinx.
+Every engine is built with the ``grammar`` key's grammar and ``grammar_threshold``.
 """
 
 import dataclasses
 from pathlib import Path
-from typing import Callable, Dict
+from typing import Callable, Dict, Optional
 
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
+from speech_event.grammar import Grammar, load_grammar
 from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES
@@ -42,13 +44,20 @@ def _model_directory(config: SpeechEventConfig) -> Path:
     return directory
 
 
+def configured_grammar(config: SpeechEventConfig) -> Optional[Grammar]:
+    """The ``grammar`` key's grammar; None for free speech; GrammarError (a ModelError) when unreadable."""
+    return load_grammar(Path(config.grammar)) if config.grammar else None
+
+
 def nemo(config: SpeechEventConfig) -> Recognizer:
     """The exported NeMo model of the configured language, of the family ``model`` names."""
     from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 
     if config.model not in NEMO_FAMILIES:
         raise ModelError(f"model {config.model} is not a NeMo family ({', '.join(NEMO_FAMILIES)})")
-    return NemoRecognizer(_model_directory(config), config.cuda)
+    return NemoRecognizer(
+        _model_directory(config), config.cuda, configured_grammar(config), config.grammar_threshold
+    )
 
 
 def whisper(config: SpeechEventConfig) -> Recognizer:
@@ -57,7 +66,13 @@ def whisper(config: SpeechEventConfig) -> Recognizer:
 
     if config.model != WHISPER:
         raise ModelError(f"the whisper engine needs model whisper; model is {config.model}")
-    return WhisperRecognizer(_model_directory(config), config.language, config.cuda)
+    return WhisperRecognizer(
+        _model_directory(config),
+        config.language,
+        config.cuda,
+        configured_grammar(config),
+        config.grammar_threshold,
+    )
 
 
 def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
@@ -66,7 +81,9 @@ def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
 
     if config.language != "english":
         raise ModelError(f"pocketsphinx transcribes English only; language is {config.language}")
-    return SphinxRecognizer(config.pocketsphinx_grammar, config.pocketsphinx_keywords)
+    return SphinxRecognizer(
+        configured_grammar(config), config.pocketsphinx_keywords, config.grammar_threshold
+    )
 
 
 def auto(config: SpeechEventConfig) -> Recognizer:
@@ -84,7 +101,7 @@ RECOGNIZERS: Dict[str, RecognizerFactory] = {
     "nemo": nemo,
     "whisper": whisper,
     "pocketsphinx": pocketsphinx,
-    "fake": lambda config: ToneRecognizer(),
+    "fake": lambda config: ToneRecognizer(configured_grammar(config)),
 }
 
 

@@ -1,111 +1,219 @@
 """The embedded English recognizer: pocketsphinx, whose English model ships inside its wheel.
 
-Three modes, by configuration: its language model (any English; the default); a grammar for a
-robot's command vocabulary (``pocketsphinx_grammar``: a JSGF file, or a plain text file of phrases,
-one per line, compiled to a JSGF grammar); a keyword list (``pocketsphinx_keywords``: one phrase a
-line, optionally with its threshold as ``/1e-20/``, pocketsphinx's kws format).
+Three modes: its language model (any English; the default); a command grammar (a ``Grammar``,
+speech_event/grammar.py: pocketsphinx searches its JSGF itself, so a grammar of any size works); a
+keyword list (``pocketsphinx_keywords``: one phrase a line, optionally with its threshold as
+``/1e-20/``, pocketsphinx's kws format).
+
+Within a grammar pocketsphinx always answers with the nearest phrase ("please open the window"
+came out as "open the door"), so speech outside the grammar is rejected by a likelihood ratio
+(issue 19). One decoder decodes the utterance twice: within the grammar, and freely with its
+English language model, weighted 3 instead of 6.5 so that the free decoding follows the sound
+more than the language model. The ratio, in nats, for the whole utterance:
+
+    ratio = ln P(audio, best phrase | grammar) - ln P(audio, best words | language model)
+
+each the score pocketsphinx gives its best path (Hypothesis.score): the acoustic log-likelihood
+plus the weighted grammar or language-model log-probabilities and insertion penalties, in nats
+(_SCORE_SCALE). The phrase is published when ratio >= threshold; otherwise the text is empty and
+``rejected`` names the phrase. Not per second, like the neural engines' ratio: a wrong word costs
+about the same in a long command as in a short one; and on the sets of bench/grammar.py the worst
+command against the best near miss, tts voice, -62 against -121 nats in total, -75 against -106
+nats per second.
+
+What makes the two scores comparable (measured, pocketsphinx 5.1): ``compallsen``, every senone
+scored every frame, so both searches normalise a frame by the same best senone (without it the
+ratios of commands and of other speech overlap entirely); and ``bestpath`` off (its lattice pass
+leaves the last word's acoustic score out of the hypothesis' score, so a final silence swallowed
+trailing words for nothing: "go to the kitchen later" scored better as "go to the kitchen" than
+the command said alone). Without ``bestpath`` a grammar has no hypothesis when no path reaches the
+grammar's end: only whole sentences are published, and the best partial path is only named as
+``rejected``. Also measured, and worse: a phone loop (allphone, with or without its phone language
+model) as the free decoding: commands and near misses overlap (-161 against -159 nats a second at
+best).
 """
 
+import math
 import re
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Dict, List, Optional, Set
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Union
 
 import numpy as np
 
-from speech_event.errors import ModelError
+from speech_event.errors import GrammarError, ModelError
+from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
 
 SAMPLE_RATE = 16000
-_WORD = re.compile(r"^[a-z']+$")
-_PHRASE = re.compile(r"\( ([a-z' ]+) \)")
+# nats (the ratio above). bench/grammar.py, pocketsphinx 5.1.1 and its en-us model: the 32 robot
+# commands in the tts voice scored -62 to +59 (median +6); of the 65 sentences outside their
+# grammar, the 55 that reached a phrase -784 to -121 (median -410); the cards recordings of
+# pocketsphinx's test data -60 to -15 against cards.gram, the librivox ones -5136 to -1490. -90
+# sits in the gap, a little nearer the commands: a false command is worse than none.
+DEFAULT_GRAMMAR_THRESHOLD = -90.0
 # Keyword spotting fires several times on one spoken keyword: detections of the same keyword that
 # start within this many frames (10 ms each) of the previous one's end are one.
 _SAME_KEYWORD_FRAMES = 50
-
-
-def phrases_to_jsgf(phrases: List[str], source: str = "<phrases>") -> str:
-    """A JSGF grammar whose sentences are exactly ``phrases`` (lowercase words)."""
-    cleaned = [" ".join(phrase.lower().split()) for phrase in phrases]
-    cleaned = [phrase for phrase in cleaned if phrase and not phrase.startswith("#")]
-    if not cleaned:
-        raise ModelError(f"{source}: no phrases; write one command phrase a line")
-    for phrase in cleaned:
-        bad = [word for word in phrase.split() if not _WORD.match(word)]
-        if bad:
-            raise ModelError(f"{source}: {phrase!r} has {bad[0]!r}; phrases are words of a-z and '")
-    alternatives = " | ".join(f"( {phrase} )" for phrase in dict.fromkeys(cleaned))
-    return f"#JSGF V1.0;\ngrammar commands;\npublic <command> = {alternatives};\n"
+# pocketsphinx scores paths in units of 2**10 of its log base (SENSCR_SHIFT); its Python binding
+# hands a score out as LOGBASE**score, so ln(Hypothesis.score) * 2**10 is the path's score in nats.
+_SCORE_SCALE = 2.0**10
+_FREE = "_free"
+_Setting = Union[bool, int, float]
+# The free decoding: language weight 3 (measured: 4 and 5 separate less, 1 takes 1.5 s a second of
+# audio); no second (fwdflat) pass and at most 1500 HMMs a frame: the same ratios, 3 times faster.
+# The grammars' searches keep pocketsphinx's defaults (read live: maxhmmpf), so these are restored.
+_FREE_SETTINGS: Mapping[str, _Setting] = {
+    "lw": 3.0,
+    "fwdflatlw": 3.0,
+    "bestpathlw": 3.0,
+    "fwdflat": False,
+    "maxhmmpf": 1500,
+}
+_JSGF_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.DOTALL)
+_JSGF_NOT_WORDS = re.compile(r"<[^<>]*>|\{[^}]*\}|/[^/]*/|[()\[\]|*+]")
 
 
 class SphinxRecognizer:
-    """The Recognizer port on pocketsphinx: its English language model, a grammar, or a keyword list."""
+    """The Recognizer port on pocketsphinx: its English language model, a command grammar (speech
+    outside it rejected), or a keyword list. Implements ``Grammars``."""
 
-    def __init__(self, grammar: str = "", keywords: str = "") -> None:
-        from pocketsphinx import Decoder  # only when this engine is chosen
-
-        if grammar and keywords:
-            raise ModelError("set pocketsphinx_grammar or pocketsphinx_keywords, not both")
-        self._decoder = Decoder(samprate=SAMPLE_RATE, loglevel="FATAL")
-        self._spotting = bool(keywords)
-        # The sentences of a phrase-list grammar: pocketsphinx returns its best partial path when
-        # no sentence fits (measured: "tell" for a "stop" it missed), which must not be published.
-        self._phrases: Optional[Set[str]] = None
-        self._grammar = bool(grammar)
-        if grammar:
-            self._use_grammar(Path(grammar))
-        elif keywords:
-            path = Path(keywords)
-            if not path.is_file():
-                raise ModelError(f"{path}: no such keyword list (pocketsphinx_keywords)")
-            self._decoder.add_kws("keywords", str(path))
-            self._decoder.activate_search("keywords")
-
-    def _use_grammar(self, path: Path) -> None:
-        try:
-            content = path.read_text(encoding="utf-8")
-        except OSError as problem:
-            raise ModelError(
-                f"{path}: cannot read the grammar (pocketsphinx_grammar): {problem.strerror}"
-            ) from None
-        if content.lstrip().startswith("#JSGF"):
-            jsgf = content
-        else:
-            jsgf = phrases_to_jsgf(content.splitlines(), str(path))
-            self._phrases = set(_PHRASE.findall(jsgf))
-        words = set(re.findall(r"[a-z']+", _sentences(jsgf)))
-        unknown = sorted(word for word in words if self._decoder.lookup_word(word) is None)
-        if unknown:
-            raise ModelError(f"{path}: words not in pocketsphinx's English dictionary: {', '.join(unknown)}")
-        self._decoder.add_jsgf_string("grammar", jsgf)
-        self._decoder.activate_search("grammar")
+    def __init__(
+        self,
+        grammar: Optional[Grammar] = None,
+        keywords: str = "",
+        grammar_threshold: Optional[float] = None,
+    ) -> None:
+        """``grammar_threshold``: the least ratio (module docstring) for a phrase to be published;
+        None: DEFAULT_GRAMMAR_THRESHOLD; -inf: no rejection (and no free decoding)."""
+        if grammar is not None and keywords:
+            raise ModelError("set grammar or pocketsphinx_keywords, not both")
+        if keywords and not Path(keywords).is_file():
+            raise ModelError(f"{keywords}: no such keyword list (pocketsphinx_keywords)")
+        self._keywords = keywords
+        self._threshold = DEFAULT_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
+        # Two decoders, each made when first needed: free speech (and keywords) as pocketsphinx
+        # decodes by default, and grammars, whose searches and their free decoding share one
+        # decoder made with compallsen. compallsen is a decoder's, not a search's, and costs the
+        # language model a quarter more time (LibriVox: 0.115 -> 0.145 s a second of audio).
+        self._plain: Any = None
+        self._grammar_decoder: Any = None
+        self._searches: Dict[str, str] = {}  # JSGF text -> its search, compiled once
+        self._search: Optional[str] = None  # the grammar's search in force; None: language model
+        self._last_ratio: Optional[float] = None
+        if keywords:
+            self._plain_decoder().add_kws("keywords", keywords)
+            self._plain_decoder().activate_search("keywords")
+        self.use_grammar(grammar)
 
     @property
     def sample_rate(self) -> int:
+        """pocketsphinx's model is of 16 kHz speech."""
         return SAMPLE_RATE
 
     @property
-    def whole_phrases(self) -> bool:
-        """In grammar mode every text is a whole phrase of the grammar (early end of turn)."""
-        return self._grammar
+    def last_ratio(self) -> Optional[float]:
+        """The ratio (module docstring) the last transcribe within a grammar judged by; None when
+        it reached no phrase or did not judge (language model, keywords, no rejection)."""
+        return self._last_ratio
+
+    def check_grammar(self, grammar: Grammar) -> None:
+        """GrammarError when this engine cannot decode within ``grammar``: a keyword list is in
+        force, the JSGF does not parse, or words are not in pocketsphinx's dictionary (named)."""
+        if self._keywords:
+            raise GrammarError(
+                f"{grammar.source}: a keyword list (pocketsphinx_keywords) is in force; pocketsphinx "
+                "decodes with a grammar or a keyword list, not both"
+            )
+        if grammar.jsgf in self._searches:
+            return
+        decoder = self._grammars()
+        unknown = [word for word in _grammar_words(grammar) if decoder.lookup_word(word) is None]
+        if unknown:
+            raise GrammarError(
+                f"{grammar.source}: words not in pocketsphinx's English dictionary: {', '.join(unknown)}"
+            )
+        try:
+            decoder.parse_jsgf(grammar.jsgf)
+        except ValueError:
+            raise GrammarError(f"{grammar.source}: pocketsphinx cannot read the JSGF grammar") from None
+
+    def use_grammar(self, grammar: Optional[Grammar]) -> None:
+        """Decode within ``grammar`` from the next transcribe on (None: the language model). Each
+        distinct grammar is compiled once, so switching back and forth costs nothing."""
+        if grammar is None:
+            self._search = None
+            return
+        search = self._searches.get(grammar.jsgf)
+        if search is None:
+            self.check_grammar(grammar)
+            search = f"grammar{len(self._searches)}"
+            self._grammars().add_jsgf_string(search, grammar.jsgf)
+            self._searches[grammar.jsgf] = search
+        self._search = search
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
+        """The text of one utterance; with a grammar, a whole phrase of it or none (``rejected``)."""
         pcm = np.clip(np.round(audio * 32767.0), -32768, 32767).astype("<i2").tobytes()
-        self._decoder.start_utt()
-        self._decoder.process_raw(pcm, full_utt=True)
-        self._decoder.end_utt()
-        if self._spotting:
+        self._last_ratio = None
+        if self._search is not None:
+            return self._within_grammar(self._search, pcm)
+        decoder = self._plain_decoder()
+        _decode(decoder, pcm)
+        if self._keywords:
             return Transcript(" ".join(self._keywords_in_order()))
-        hypothesis = self._decoder.hyp()
-        text = "" if hypothesis is None else " ".join(hypothesis.hypstr.split())
-        if self._phrases is not None and text not in self._phrases:
-            text = ""
+        hypothesis = decoder.hyp()
         # No confidence: pocketsphinx computes no posterior unless asked to (its prob stays 0).
-        return Transcript(text)
+        return Transcript("" if hypothesis is None else " ".join(hypothesis.hypstr.split()))
+
+    def _within_grammar(self, search: str, pcm: bytes) -> Transcript:
+        decoder = self._grammars()
+        decoder.activate_search(search)
+        partial = _decode(decoder, pcm, partial=True)
+        best = decoder.hyp()
+        phrase = "" if best is None else " ".join(best.hypstr.split())
+        if not phrase:
+            # No path reached the grammar's end: the best partial path ("go to the living") is
+            # what the speech was nearest to, never published.
+            return Transcript("", rejected=partial or None)
+        if self._threshold == -math.inf:
+            return Transcript(phrase)
+        grammar_score = _nats(best.score)
+        decoder.activate_search(_FREE)
+        _decode(decoder, pcm)
+        free = decoder.hyp()
+        # No free hypothesis (nothing the language model could say): the grammar's path stands alone.
+        ratio = 0.0 if free is None else grammar_score - _nats(free.score)
+        self._last_ratio = ratio
+        return Transcript(phrase) if ratio >= self._threshold else Transcript("", rejected=phrase)
+
+    def _plain_decoder(self) -> Any:
+        """pocketsphinx as it decodes by default: its language model (and any keyword list)."""
+        if self._plain is None:
+            from pocketsphinx import Decoder  # only when this engine is chosen
+
+            self._plain = Decoder(samprate=SAMPLE_RATE, loglevel="FATAL")
+        return self._plain
+
+    def _grammars(self) -> Any:
+        """The decoder of the grammars' searches and of their free decoding (_FREE_SETTINGS)."""
+        if self._grammar_decoder is None:
+            from pocketsphinx import Decoder, NGramModel
+
+            decoder = Decoder(
+                samprate=SAMPLE_RATE, loglevel="FATAL", compallsen=True, bestpath=False, lm=None
+            )
+            with _settings(decoder, _FREE_SETTINGS):
+                # pocketsphinx applies the language weight when it reads a model
+                model = NGramModel(decoder.config, decoder.logmath, _language_model())
+                decoder.add_lm(_FREE, model)
+            self._grammar_decoder = decoder
+        return self._grammar_decoder
 
     def _keywords_in_order(self) -> List[str]:
         words: List[str] = []
         last_end: Dict[str, int] = {}
-        for segment in sorted(self._decoder.seg() or [], key=lambda segment: segment.start_frame):
+        for segment in sorted(self._plain_decoder().seg() or [], key=lambda segment: segment.start_frame):
             word = segment.word.strip()
             repeated = word in last_end and segment.start_frame - last_end[word] < _SAME_KEYWORD_FRAMES
             last_end[word] = segment.end_frame
@@ -114,6 +222,47 @@ class SphinxRecognizer:
         return words
 
 
-def _sentences(jsgf: str) -> str:
-    """The right-hand sides of a JSGF grammar, where its words are."""
-    return " ".join(line.split("=", 1)[1] for line in jsgf.splitlines() if "=" in line)
+def _decode(decoder: Any, pcm: bytes, partial: bool = False) -> str:
+    """Decode one utterance with the decoder's active search; with ``partial``, the best path
+    before the utterance ends (for a grammar: which need not reach the grammar's end)."""
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    before_end = decoder.hyp() if partial else None
+    decoder.end_utt()
+    return "" if before_end is None else " ".join(before_end.hypstr.split())
+
+
+@contextmanager
+def _settings(decoder: Any, settings: Mapping[str, _Setting]) -> Iterator[None]:
+    """pocketsphinx reads these when a search is made: made with them, then restored."""
+    config = decoder.config
+    saved = {key: config[key] for key in settings}
+    try:
+        for key, value in settings.items():
+            config[key] = value
+        yield
+    finally:
+        for key, value in saved.items():
+            config[key] = value
+
+
+def _language_model() -> str:
+    import pocketsphinx
+
+    return str(Path(pocketsphinx.get_model_path()) / "en-us" / "en-us.lm.bin")
+
+
+def _nats(score: float) -> float:
+    """A path score as its binding hands it out, in nats (-inf when it underflowed)."""
+    return math.log(score) * _SCORE_SCALE if score > 0.0 else -math.inf
+
+
+def _grammar_words(grammar: Grammar) -> List[str]:
+    """The words a grammar's sentences are made of, as pocketsphinx looks them up."""
+    if grammar.phrases is not None:
+        return sorted({word for phrase in grammar.phrases for word in phrase.split()})
+    words = set()
+    for statement in _JSGF_COMMENT.sub(" ", grammar.jsgf).split(";"):
+        if "=" in statement:
+            words.update(_JSGF_NOT_WORDS.sub(" ", statement.split("=", 1)[1]).split())
+    return sorted(words)

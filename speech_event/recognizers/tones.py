@@ -4,12 +4,18 @@ A stand-in for speech in hermetic tests: each character of ``[a-z']`` is a short
 own frequency, letters are parted by a short gap and words by a long one. The fake recognizer
 decodes it back exactly, so a node test can assert the text published for the text "spoken".
 The alphabet is the Kinyarwanda model's, without the space (a space is a long gap).
+
+With a grammar in force it answers with the decoded text when that is a phrase of the grammar, and
+otherwise with nothing, naming the phrase nearest in spelling as rejected: the node's grammar
+handling can be tested with it as with the real engines.
 """
 
-from typing import List
+import difflib
+from typing import List, Optional
 
 import numpy as np
 
+from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
 
 SYMBOLS = "abcdefghijklmnopqrstuvwxyz'"
@@ -74,12 +80,28 @@ def decode_tones(audio: np.ndarray, sample_rate: int) -> str:
 
 
 class ToneRecognizer:
-    """The fake recognizer: decodes the tones code, reports no confidence."""
+    """The fake recognizer: decodes the tones code, reports no confidence; takes a grammar."""
 
     sample_rate = 16000
 
+    def __init__(self, grammar: Optional[Grammar] = None) -> None:
+        self._phrases: Optional[List[str]] = None
+        if grammar is not None:
+            self.use_grammar(grammar)
+
+    def check_grammar(self, grammar: Grammar) -> None:
+        """Any grammar of at most MAX_SENTENCES sentences: the answer is matched against them."""
+        grammar.sentences("the tones engine")
+
+    def use_grammar(self, grammar: Optional[Grammar]) -> None:
+        self._phrases = None if grammar is None else list(grammar.sentences("the tones engine"))
+
     def transcribe(self, audio: np.ndarray) -> Transcript:
-        return Transcript(decode_tones(audio, self.sample_rate))
+        text = decode_tones(audio, self.sample_rate)
+        if self._phrases is None or not text or text in self._phrases:
+            return Transcript(text)
+        nearest = max(self._phrases, key=lambda phrase: difflib.SequenceMatcher(None, text, phrase).ratio())
+        return Transcript("", rejected=nearest)
 
     def stop(self) -> None:
         """Nothing to stop: decoding takes a few milliseconds (so speculation may use this engine)."""

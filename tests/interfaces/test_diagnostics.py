@@ -40,6 +40,8 @@ def test_the_status_counts_what_the_node_did_and_times_recognition() -> None:
         "soundDetection": "publisher connected",
         "utterances transcribed": "1",
         "texts published": "1",
+        "grammar": "none (free speech)",
+        "utterances out of grammar": "0",
         "utterances discarded: disabled": "1",
         "utterances discarded: too_short": "1",
         "utterances discarded: below_vad_threshold": "0",

@@ -20,7 +20,7 @@ from speech_event.topics import SPEECH_NOT_RECOGNIZED
     [
         ("go to the kitchen", "'go to the kitchen'"),
         (None, "None"),
-        (Transcript(b"go"), "Transcript(text=b'go', confidence=None)"),  # type: ignore[arg-type]
+        (Transcript(b"go"), "Transcript(text=b'go', confidence=None, rejected=None)"),  # type: ignore[arg-type]
     ],
 )
 def test_an_answer_that_is_not_a_transcript_with_text_is_refused_naming_it(

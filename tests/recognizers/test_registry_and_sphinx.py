@@ -1,4 +1,5 @@
-"""The embedded English engine (pocketsphinx) in its three modes, and how the node picks its engine."""
+"""The embedded English engine (pocketsphinx): its keyword mode, and how the node picks its engine
+(its grammar mode: test_sphinx_grammar.py)."""
 
 from pathlib import Path
 
@@ -9,53 +10,15 @@ from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
+from speech_event.grammar import load_grammar
+from speech_event.ports import Transcript
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.sphinx import SphinxRecognizer, phrases_to_jsgf
+from speech_event.recognizers.sphinx import SphinxRecognizer
 from tests.helpers.application import run_application
 from tests.helpers.paths import ROOT
 
 COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
-
-
-def test_phrases_compile_to_a_jsgf_grammar_of_exactly_those_sentences() -> None:
-    assert phrases_to_jsgf(["# a comment", "Go  to the kitchen", "", "stop", "stop"]) == (
-        "#JSGF V1.0;\ngrammar commands;\npublic <command> = ( go to the kitchen ) | ( stop );\n"
-    )
-
-
-@pytest.mark.parametrize(
-    ("phrases", "message"),
-    [
-        (["# nothing"], "robot.txt: no phrases; write one command phrase a line"),
-        (["turn 90 degrees"], "robot.txt: 'turn 90 degrees' has '90'; phrases are words of a-z and '"),
-    ],
-)
-def test_a_bad_phrase_list_is_named(phrases: list, message: str) -> None:  # type: ignore[type-arg]
-    with pytest.raises(ModelError) as error:
-        phrases_to_jsgf(phrases, "robot.txt")
-    assert str(error.value) == message
-
-
-def test_grammar_mode_transcribes_every_robot_command_exactly() -> None:
-    recognizer = SphinxRecognizer(grammar=str(COMMANDS))
-    commands = [line for line in COMMANDS.read_text().splitlines() if line and not line.startswith("#")]
-    assert [recognizer.transcribe(speak_tts(command, 16000)).text for command in commands] == commands
-
-
-def test_a_jsgf_file_is_used_as_it_is(tmp_path: Path) -> None:
-    grammar = tmp_path / "yes_no.jsgf"
-    grammar.write_text("#JSGF V1.0;\ngrammar answers;\npublic <answer> = yes | no;\n")
-    recognizer = SphinxRecognizer(grammar=str(grammar))
-    assert recognizer.transcribe(speak_tts("no", 16000)).text == "no"
-
-
-def test_a_grammar_word_missing_from_the_dictionary_is_named(tmp_path: Path) -> None:
-    phrases = tmp_path / "robot.txt"
-    phrases.write_text("go to the kitchen\nmuraho pepper\n")
-    with pytest.raises(ModelError) as error:
-        SphinxRecognizer(grammar=str(phrases))
-    assert str(error.value) == f"{phrases}: words not in pocketsphinx's English dictionary: muraho"
 
 
 def test_keyword_mode_reports_the_keyword_once() -> None:
@@ -66,8 +29,14 @@ def test_keyword_mode_reports_the_keyword_once() -> None:
 
 def test_grammar_and_keywords_together_are_refused() -> None:
     with pytest.raises(ModelError) as error:
-        SphinxRecognizer(grammar=str(COMMANDS), keywords=str(COMMANDS))
-    assert str(error.value) == "set pocketsphinx_grammar or pocketsphinx_keywords, not both"
+        SphinxRecognizer(load_grammar(COMMANDS), keywords=str(COMMANDS))
+    assert str(error.value) == "set grammar or pocketsphinx_keywords, not both"
+
+
+def test_a_missing_keyword_list_is_named(tmp_path: Path) -> None:
+    with pytest.raises(ModelError) as error:
+        SphinxRecognizer(keywords=str(tmp_path / "keywords.txt"))
+    assert str(error.value) == f"{tmp_path / 'keywords.txt'}: no such keyword list (pocketsphinx_keywords)"
 
 
 def test_auto_picks_pocketsphinx_for_english_without_a_model_and_nemo_with_one(tmp_path: Path) -> None:
@@ -94,6 +63,8 @@ def test_kinyarwanda_without_a_model_stops_the_node_with_status_2(tmp_path: Path
 
 
 def test_a_phrase_grammar_publishes_only_whole_phrases() -> None:
-    recognizer = SphinxRecognizer(grammar=str(COMMANDS))
-    # Speech that is no command: pocketsphinx's best path ends inside a phrase ("go to the living").
-    assert recognizer.transcribe(speak_tts("the weather is lovely in kigali today", 16000)).text == ""
+    recognizer = SphinxRecognizer(load_grammar(COMMANDS))
+    # Speech that is no command: once "go to the living" (pocketsphinx's best path stopped inside a
+    # phrase); now only paths through a whole phrase count, and the nearest is rejected.
+    transcript = recognizer.transcribe(speak_tts("the weather is lovely in kigali today", 16000))
+    assert transcript == Transcript("", rejected="go to the living room")

@@ -25,8 +25,16 @@ from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.ros import RosTransport, call_service
 from speech_event.config import SpeechEventConfig
-from speech_event.gui import ERROR_COLOUR, TranscriptWindow, status_of
-from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, KeyValue, String
+from speech_event.gui import ERROR_COLOUR, TranscriptWindow, grammar_in, status_of
+from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
+from speech_event.messages import (
+    DiagnosticArray,
+    DiagnosticStatus,
+    Float32MultiArray,
+    KeyValue,
+    SetGrammarRequest,
+    String,
+)
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
 from tests.helpers.application import APPLICATION
@@ -94,6 +102,7 @@ def test_the_window_shows_texts_errors_in_red_the_newest_in_view_and_drives_the_
         window.switch_language()
         window.enabled.set(False)
         window.toggle_enabled()
+        assert bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest("yes|no")).response == 1  # type: ignore[attr-defined]
         clock.advance_to(NOON + 10.0)
         window.refresh()
         assert window.lines()[-2:] == [
@@ -101,7 +110,7 @@ def test_the_window_shows_texts_errors_in_red_the_newest_in_view_and_drives_the_
             "12:00:10  Error: soundDetection is down",
         ]
         assert (node.language, node.enabled) == ("kinyarwanda", False)
-        assert window.status.cget("text") == "disabled"
+        assert window.status.cget("text") == "disabled · grammar: yes|no"
     finally:
         root.destroy()
         node.stop()
@@ -175,3 +184,6 @@ def test_the_status_line_reads_the_nodes_diagnostics() -> None:
     assert status_of(diagnostics(warn, enabled="true")) == "transcribing"
     assert status_of(diagnostics(error, enabled="true")) == "soundDetection down"
     assert status_of(diagnostics(error, enabled="false")) == "disabled"
+    assert grammar_in(None) is None
+    assert grammar_in(diagnostics(ok, grammar="none (free speech)")) is None
+    assert grammar_in(diagnostics(ok, grammar="yes|no")) == "yes|no"

@@ -6,22 +6,28 @@ the encoder's subsampling factor, TDT's durations, NeMo's preprocessor settings 
 window_size, window_stride, n_fft, features, normalize, preemph) and max_symbols_per_step.
 onnx-asr's names (features_size, max_tokens_per_step) are written too, so the same directory
 loads in onnx-asr. A directory written before the family and decoding were recorded is a
-conformer-transducer with RNN-T decoding.
+conformer-transducer with RNN-T decoding. onnx-asr's own directories load as they are: what their
+config.json (or a directory without one) does not record is derived (onnx_asr_layout.py).
 """
 
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 from speech_event.errors import ModelError
 from speech_event.recognizers.nemo.features import FeatureSettings
+from speech_event.recognizers.nemo.onnx_asr_layout import CTC as CTC
+from speech_event.recognizers.nemo.onnx_asr_layout import RNNT as RNNT
+from speech_event.recognizers.nemo.onnx_asr_layout import TDT as TDT
+from speech_event.recognizers.nemo.onnx_asr_layout import completed, decoding_of
 from speech_event.recognizers.onnx.directory import MANIFEST_FILE as MANIFEST_FILE
 
-RNNT, TDT, CTC = "nemo-conformer-rnnt", "nemo-conformer-tdt", "nemo-conformer-ctc"
 DECODINGS = (RNNT, TDT, CTC)
 CONFORMER_TRANSDUCER, PARAKEET = "conformer-transducer", "parakeet"
 NEMO_FAMILIES = (CONFORMER_TRANSDUCER, PARAKEET)
+# The family of a directory that does not record it (onnx-asr's): the decoding says
+FAMILY_OF_DECODING = {RNNT: CONFORMER_TRANSDUCER, TDT: PARAKEET, CTC: PARAKEET}
 
 
 @dataclass(frozen=True)
@@ -71,10 +77,25 @@ def _checked(manifest: Manifest) -> Manifest:
     return manifest
 
 
-def load_manifest(path: Path) -> Manifest:
-    """Read a model directory's config.json; ModelError says what is missing or wrong."""
+def _document(path: Path) -> Dict[str, Any]:
+    """config.json at ``path`` as a JSON object; {} when there is none (onnx-asr's may have none)."""
     try:
         document = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        if path.parent.is_dir():
+            return {}
+        raise
+    if not isinstance(document, dict):
+        raise ValueError(f"{MANIFEST_FILE} is not a JSON object")
+    return document
+
+
+def load_manifest(path: Path) -> Manifest:
+    """Read a model directory's config.json (``path``), deriving what an onnx-asr directory's does
+    not record (onnx_asr_layout.py); ModelError says what is missing or wrong."""
+    try:
+        document = completed(_document(path), path.parent)
+        decoding = str(document.get("model_type", RNNT))
         settings = FeatureSettings(
             sample_rate=int(document["sample_rate"]),
             window_seconds=float(document["window_size"]),
@@ -88,8 +109,8 @@ def load_manifest(path: Path) -> Manifest:
             Manifest(
                 settings,
                 int(document.get("max_symbols_per_step", 10)),
-                str(document.get("model_type", RNNT)),
-                str(document.get("family", CONFORMER_TRANSDUCER)),
+                decoding,
+                str(document.get("family", FAMILY_OF_DECODING.get(decoding, CONFORMER_TRANSDUCER))),
                 int(document.get("subsampling_factor", 4)),
                 tuple(int(duration) for duration in document.get("durations", ())),
             )
@@ -102,3 +123,15 @@ def load_manifest(path: Path) -> Manifest:
             "window_stride, n_fft and features, as in NeMo's preprocessor config, and names its "
             "model_type, family and (TDT) durations as speech-event export-nemo writes them"
         ) from None
+
+
+def family_of_directory(directory: Path) -> Optional[str]:
+    """The family of the NeMo model in ``directory``, as load_manifest reads it but reading no more
+    than that needs (its config.json's family, else its decoding's); None when it cannot be told."""
+    try:
+        document = _document(directory / MANIFEST_FILE)
+        if "family" in document:
+            return str(document["family"])
+        return FAMILY_OF_DECODING.get(decoding_of(document, directory))
+    except (OSError, ValueError, ModelError):
+        return None

@@ -9,6 +9,7 @@ hidden]) -> ``outputs`` (logits, last dimension V + 1, then TDT's durations), ``
 ``output_states_1``, ``output_states_2``.
 A CTC model (or a hybrid model's CTC head) is one file, ``model.onnx``: ``audio_signal`` and
 ``length`` as above -> ``logprobs`` [B, T', V + 1].
+Where only a file's int8 version is there (``encoder-model.int8.onnx``, onnx-asr's name), it is used.
 """
 
 from pathlib import Path
@@ -17,11 +18,13 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import onnxruntime
 
+from speech_event.recognizers.nemo.onnx_asr_layout import CTC_FILE as CTC_FILE
+from speech_event.recognizers.nemo.onnx_asr_layout import DECODER_JOINT_FILE as DECODER_JOINT_FILE
+from speech_event.recognizers.nemo.onnx_asr_layout import ENCODER_FILE as ENCODER_FILE
+from speech_event.recognizers.nemo.onnx_asr_layout import NEMO_DIRECTORY as NEMO_DIRECTORY
+from speech_event.recognizers.nemo.onnx_asr_layout import onnx_file
 from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session, providers
 
-ENCODER_FILE = "encoder-model.onnx"
-DECODER_JOINT_FILE = "decoder_joint-model.onnx"
-CTC_FILE = "model.onnx"
 CTC_OUTPUTS = {"logprobs": 3}
 ENCODER_INPUTS = {"audio_signal": 3, "length": 1}
 ENCODER_OUTPUTS = {"outputs": 3, "encoded_lengths": 1}
@@ -35,12 +38,6 @@ DECODER_INPUTS = {
 DECODER_OUTPUTS = {"outputs": -1, "prednet_lengths": -1, "output_states_1": 3, "output_states_2": 3}
 
 LstmState = Tuple[np.ndarray, np.ndarray]
-
-
-NEMO_DIRECTORY = (
-    f"a model directory holds {ENCODER_FILE}, {DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), "
-    "vocab.txt and config.json (speech-event export-nemo MODEL.nemo DIR writes one)"
-)
 
 
 def _session(path: Path, execution_providers: List[str]) -> onnxruntime.InferenceSession:
@@ -63,7 +60,10 @@ class TransducerModel:
     """A transducer's two ONNX files (RNN-T or TDT): the encoder, and the decoder-joint, run a step a time."""
 
     def __init__(self, directory: Path, cuda: bool) -> None:
-        encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_JOINT_FILE
+        encoder_path, decoder_path = (
+            onnx_file(directory, ENCODER_FILE),
+            onnx_file(directory, DECODER_JOINT_FILE),
+        )
         execution_providers = providers(cuda)  # decided once, so a missing CUDA is said once
         self._encoder = _session(encoder_path, execution_providers)
         self._decoder_joint = _session(decoder_path, execution_providers)
@@ -99,25 +99,60 @@ class TransducerModel:
         state: LstmState,
         run: Optional[onnxruntime.RunOptions] = None,
     ) -> Tuple[np.ndarray, LstmState]:
+        """The logits at ``frame`` [D] after ``last_token``, and the state after consuming it."""
+        logits, after = self.joint(frame[None], [last_token], state, run)
+        return logits.reshape(-1), after
+
+    def joint(
+        self,
+        frames: np.ndarray,
+        last_tokens: Sequence[int],
+        states: LstmState,
+        run: Optional[onnxruntime.RunOptions] = None,
+    ) -> Tuple[np.ndarray, LstmState]:
+        """Each of ``last_tokens`` (N, its state the N-th of ``states``, [layers, N, hidden]) against
+        every one of ``frames`` [T', D], in one decoder-joint call of batch N * T' (NeMo exports the
+        batch axis dynamic): logits [N, T', logits] and the states after each token [layers, N, hidden].
+        The prediction network never sees the frames, so a token's state after is the same for every
+        frame: the first frame's is kept.
+        """
+        count, length = len(last_tokens), len(frames)
         logits, h, c = self._decoder_joint.run(
             ["outputs", "output_states_1", "output_states_2"],
             {
-                "encoder_outputs": frame[None, :, None].astype(np.float32),
-                "targets": np.array([[last_token]], dtype=np.int32),
-                "target_length": np.array([1], dtype=np.int32),
-                "input_states_1": state[0],
-                "input_states_2": state[1],
+                "encoder_outputs": np.tile(frames[:, :, None], (count, 1, 1)).astype(np.float32),
+                "targets": np.repeat(np.asarray(last_tokens, dtype=np.int32), length)[:, None],
+                "target_length": np.ones(count * length, dtype=np.int32),
+                "input_states_1": np.repeat(states[0], length, axis=1),
+                "input_states_2": np.repeat(states[1], length, axis=1),
             },
             run,
         )
-        return np.asarray(logits).reshape(-1), (h, c)
+        return np.asarray(logits).reshape(count, length, -1), (h[:, ::length], c[:, ::length])
+
+    def lattice(
+        self,
+        frames: np.ndarray,
+        tokens: Sequence[int],
+        blank: int,
+        run: Optional[onnxruntime.RunOptions] = None,
+    ) -> np.ndarray:
+        """The joint's logits [T', U + 1, logits] at every frame after the start (the blank, as
+        greedy decoding starts) and each prefix of ``tokens``: U + 1 decoder-joint calls, each over all
+        frames. Call u feeds ``tokens[u - 1]`` with the state after call u - 1, as greedy decoding
+        moves the state on only with a token."""
+        state, columns = self.initial_state(), []
+        for last in [blank, *tokens]:
+            logits, state = self.joint(frames, [last], state, run)
+            columns.append(logits[0])
+        return np.stack(columns, axis=1)
 
 
 class CtcModel:
     """A CTC model's one ONNX file: features in, per-frame log-probabilities out."""
 
     def __init__(self, directory: Path, cuda: bool) -> None:
-        path = directory / CTC_FILE
+        path = onnx_file(directory, CTC_FILE)
         self._model = _session(path, providers(cuda))
         _check(path, "inputs", self._model.get_inputs(), ENCODER_INPUTS)
         _check(path, "outputs", self._model.get_outputs(), CTC_OUTPUTS)

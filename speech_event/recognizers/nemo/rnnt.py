@@ -3,9 +3,13 @@
 For each encoder frame, ask the decoder-joint for the next token given the last emitted token and
 the prediction network's state; emit it while it is not the blank, at most ``max_symbols`` times per
 frame, updating the state only on emission; the blank moves on to the next frame.
+
+Also the exact log-likelihood of a given token sequence (the forward algorithm over all alignments),
+which TDT shares: a grammar's phrases are scored by it.
 """
 
-from typing import Callable, Tuple, TypeVar
+import math
+from typing import Callable, Dict, Sequence, Tuple, TypeVar
 
 import numpy as np
 
@@ -31,3 +35,97 @@ def rnnt_greedy(
             found.emit(token, logits)
             last, state = token, next_state
     return found
+
+
+def log_softmax_rows(logits: np.ndarray) -> np.ndarray:
+    """log(softmax) over the last axis of any array, as ``log_softmax`` does for one row (float64,
+    shifted by each row's maximum): a lattice's rows at once, not a Python call per (t, u)."""
+    values = np.asarray(logits, dtype=np.float64)
+    shifted = values - values.max(axis=-1, keepdims=True)
+    result: np.ndarray = shifted - np.log(np.exp(shifted).sum(axis=-1, keepdims=True))
+    return result
+
+
+def blank_and_token_log_probabilities(
+    log_probabilities: np.ndarray, tokens: Sequence[int], blank: int
+) -> Tuple[np.ndarray, np.ndarray]:
+    """From a lattice's token log-probabilities [T', U + 1, V + 1]: the blank's at every (t, u)
+    [T', U + 1], and the next token's, ``tokens[u]``, at every (t, u < U) [T', U]."""
+    positions = np.arange(len(tokens))
+    emitted = log_probabilities[:, positions, np.asarray(tokens, dtype=np.intp)]
+    return log_probabilities[:, :, blank], emitted
+
+
+def transducer_forward(
+    blank_moves: Dict[int, np.ndarray], token_moves: Dict[int, np.ndarray], past_end: bool = False
+) -> float:
+    """log of the summed probability of every path from (t, u) = (0, 0) that ends by a blank
+    landing exactly on t = T' with u = U, in log space; with ``past_end``, of every path whose last
+    move, a blank or the last token, reaches or passes t = T' with u = U (where greedy decoding
+    stops: its distribution over texts).
+
+    ``blank_moves[d]`` [T', U + 1]: log-probability of a blank at (t, u) moving to (t + d, u), d >= 1;
+    ``token_moves[d]`` [T', U]: of the next token at (t, u) moving to (t + d, u + 1), d >= 0.
+    RNN-T is {1: blank} and {0: token}; TDT has one move per duration. alpha(t, u) sums every way into
+    (t, u); a d = 0 token move stays on frame t, so u runs upwards within each frame.
+    """
+    if not blank_moves:  # no blank moves on: no path can end
+        return -math.inf
+    frames, positions = next(iter(blank_moves.values())).shape
+    alpha = np.full((frames, positions), -np.inf)
+    for t in range(frames):
+        into = np.full(positions, -np.inf)
+        if t == 0:
+            into[0] = 0.0
+        for d, weights in blank_moves.items():
+            if d <= t:
+                into = np.logaddexp(into, alpha[t - d] + weights[t - d])
+        for d, weights in token_moves.items():
+            if 0 < d <= t:
+                into[1:] = np.logaddexp(into[1:], alpha[t - d, :-1] + weights[t - d])
+        if 0 in token_moves:
+            staying = token_moves[0][t]
+            for u in range(1, positions):
+                into[u] = np.logaddexp(into[u], into[u - 1] + staying[u - 1])
+        alpha[t] = into
+    if past_end:
+        endings = [
+            alpha[t, -1] + weights[t, -1]
+            for d, weights in blank_moves.items()
+            for t in range(max(0, frames - d), frames)
+        ]
+        endings += [
+            alpha[t, -2] + weights[t, -1]
+            for d, weights in token_moves.items()
+            if d > 0 and positions > 1
+            for t in range(max(0, frames - d), frames)
+        ]
+    else:
+        endings = [
+            alpha[frames - d, -1] + weights[frames - d, -1]
+            for d, weights in blank_moves.items()
+            if d <= frames
+        ]
+    return float(np.logaddexp.reduce(endings)) if endings else -math.inf
+
+
+def rnnt_forward(blank: np.ndarray, token: np.ndarray, one_per_frame: bool = False) -> float:
+    """log P(tokens) from the blank's log-probabilities [T', U + 1] and the next token's [T', U]:
+    a blank moves one frame on, a token stays on its frame. ``one_per_frame``: the decoding of
+    max_symbols_per_step = 1, where a token moves one frame on too (greedy takes no blank after it)
+    and a path ends on reaching T'."""
+    if one_per_frame:
+        return transducer_forward({1: blank}, {1: token}, past_end=True)
+    return transducer_forward({1: blank}, {0: token})
+
+
+def rnnt_log_likelihood(lattice: np.ndarray, tokens: Sequence[int], blank: int) -> float:
+    """log P(tokens | audio): the sum over every alignment, not greedy's one path, so that phrases
+    compare by the model's own probability of them.
+
+    ``lattice`` [T', U + 1, V + 1]: raw joint logits, lattice[t, u] at frame t after the prediction
+    network consumed the start (the blank) and ``tokens[:u]``. alpha(0, 0) = 0; alpha(t, u) =
+    logaddexp(alpha(t-1, u) + blank(t-1, u), alpha(t, u-1) + token(t, u-1)); the result is
+    alpha(T'-1, U) + blank(T'-1, U), -inf with no frames.
+    """
+    return rnnt_forward(*blank_and_token_log_probabilities(log_softmax_rows(lattice), tokens, blank))

@@ -1,5 +1,6 @@
 """An exported model directory: a directory, not the framework's own file, whose config.json
-names the family it was exported from (every family writes one)."""
+names the family it was exported from (every family writes one; for onnx-asr's directories, which
+do not, the family is derived)."""
 
 import json
 from pathlib import Path
@@ -8,6 +9,9 @@ from typing import Union
 from speech_event.errors import ModelError
 
 MANIFEST_FILE = "config.json"
+WHISPER_FAMILY = "whisper"
+# model_type in the config.json of Hugging Face's Whisper exports (optimum) and of onnx-asr's own
+WHISPER_MODEL_TYPES = ("whisper", "whisper-ort")
 
 
 def exported_directory(path: Union[str, Path], framework_suffix: str, export: str) -> Path:
@@ -25,10 +29,23 @@ def exported_directory(path: Union[str, Path], framework_suffix: str, export: st
 
 
 def family_of(directory: Path, unrecorded: str) -> str:
-    """The family a model directory was exported from (its config.json's family), whatever its
-    engine; ``unrecorded`` for a directory written before families were recorded."""
+    """The family of a model directory, whatever its engine: its config.json's family; whisper for
+    a Whisper model of Hugging Face's or onnx-asr's (their model_type); for another that does not
+    record it (an onnx-asr NeMo directory, with or without config.json), the family the NeMo engine
+    reads in it; ``unrecorded`` when none of these says."""
     try:
         document = json.loads((directory / MANIFEST_FILE).read_text(encoding="utf-8"))
-        return str(document.get("family", unrecorded))
-    except (OSError, ValueError, AttributeError):
+    except FileNotFoundError:
+        document = {}
+    except (OSError, ValueError):
         return unrecorded  # the engine says what is wrong with it
+    if not isinstance(document, dict):
+        return unrecorded
+    if "family" in document:
+        return str(document["family"])
+    if document.get("model_type") in WHISPER_MODEL_TYPES:
+        return WHISPER_FAMILY
+    # imported here: the NeMo manifest reads this module's MANIFEST_FILE
+    from speech_event.recognizers.nemo.manifest import family_of_directory
+
+    return family_of_directory(directory) or unrecorded

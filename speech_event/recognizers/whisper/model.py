@@ -10,6 +10,7 @@ width] (the self-attention cache of the tokens before), every ``cross_k_i``, ``c
 width]: a step costs one position.
 """
 
+import copy
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
 
@@ -96,3 +97,9 @@ class DecoderSession:
             ["logits", "new_self_k", "new_self_v"], {**inputs, **self._cross}, self._run
         )
         return np.asarray(logits[0])
+
+    def fork(self) -> "DecoderSession":
+        """A session that goes on from the tokens given so far, apart from this one: many phrases are
+        scored after one prompt, whose decoder pass they share. A call replaces the cache's arrays,
+        never writes into them, so the two share them until each runs on."""
+        return copy.copy(self)

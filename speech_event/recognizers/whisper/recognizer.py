@@ -5,19 +5,26 @@ Audio longer than 30 s (Whisper's window) is cut at its quietest 0.1 s between 2
 each piece; the pieces' texts are joined. Confidence: 1 - no_speech_prob of the first piece, as
 the robot's node reports it. A language with no token in the model directory's config.json (Whisper
 has none for Kinyarwanda) is refused when the engine is built.
+
+With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing in
+the forms Whisper writes it (forced.py), the answer chosen as onnx/grammar_choice.py says. A
+command fits in Whisper's 30 s window: only the first piece is decoded then.
 """
 
 from pathlib import Path
-from typing import List, Optional, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import onnxruntime
 
-from speech_event.errors import ModelError
+from speech_event.errors import GrammarError, ModelError
+from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
 from speech_event.recognizers.onnx.directory import exported_directory
+from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
+from speech_event.recognizers.whisper.forced import phrase_tokens, phrase_variants, score_phrases
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.manifest import (
     MANIFEST_FILE,
@@ -30,6 +37,9 @@ from speech_event.recognizers.whisper.model import DecoderSession, WhisperModel
 
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10
+ENGINE = "the Whisper engine"
+# A grammar's phrases, each with the token sequences of the forms the model can spell.
+PhraseForms = Dict[str, List[List[int]]]
 
 
 def pieces_at_quiet_points(audio: np.ndarray) -> List[np.ndarray]:
@@ -49,7 +59,16 @@ def pieces_at_quiet_points(audio: np.ndarray) -> List[np.ndarray]:
 class WhisperRecognizer:
     """The Recognizer port on an exported Whisper model directory, for one language; Stoppable."""
 
-    def __init__(self, model_directory: Union[str, Path], language: str, cuda: bool = False) -> None:
+    def __init__(
+        self,
+        model_directory: Union[str, Path],
+        language: str,
+        cuda: bool = False,
+        grammar: Optional[Grammar] = None,
+        grammar_threshold: Optional[float] = None,
+    ) -> None:
+        """``grammar_threshold``: see onnx/grammar_choice.py (the ``grammar_threshold`` key); None:
+        NEURAL_GRAMMAR_THRESHOLD."""
         directory = exported_directory(model_directory, ".pt", "export-whisper")
         self._manifest = load_whisper_manifest(directory / MANIFEST_FILE)
         if language not in self._manifest.languages:
@@ -72,10 +91,41 @@ class WhisperRecognizer:
                 "the files are not of one export"
             )
         self._runs = StoppableRuns()
+        self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
+        self._compiled: Dict[Grammar, PhraseForms] = {}
+        self._grammar: Optional[Grammar] = None
+        self.use_grammar(grammar)
 
     @property
     def sample_rate(self) -> int:
         return SAMPLE_RATE
+
+    def check_grammar(self, grammar: Grammar) -> None:
+        """Every phrase must be spelt by the model's tokens in at least one form."""
+        self._forms(grammar)
+
+    def use_grammar(self, grammar: Optional[Grammar]) -> None:
+        if grammar is not None:
+            self._forms(grammar)
+        self._grammar = grammar
+
+    def _forms(self, grammar: Grammar) -> PhraseForms:
+        compiled = self._compiled.get(grammar)
+        if compiled is not None:
+            return compiled
+        compiled = {}
+        for phrase in grammar.sentences(ENGINE):
+            forms = []
+            for variant in phrase_variants(phrase):
+                try:
+                    forms.append(phrase_tokens(variant, self._pieces, self._manifest.eot))
+                except ModelError:
+                    continue  # a form the model cannot spell (a tokenizer without capitals)
+            if not forms:
+                raise GrammarError(f"{grammar.source}: {ENGINE}'s tokens cannot spell {phrase!r}")
+            compiled[phrase] = forms
+        self._compiled[grammar] = compiled
+        return compiled
 
     def decode(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> WhisperResult:
         """Whisper's greedy decoding of one piece of at most 30 s."""
@@ -84,6 +134,11 @@ class WhisperRecognizer:
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = self._runs.start()
+        grammar = self._grammar
+        if grammar is not None:
+            return self._within(
+                self._forms(grammar), pieces_at_quiet_points(np.asarray(audio, np.float32))[0], run
+            )
         results = [self.decode(piece, run) for piece in pieces_at_quiet_points(np.asarray(audio, np.float32))]
         texts = [
             text_of(result.tokens, self._pieces, self._manifest.timestamp_begin).strip() for result in results
@@ -92,6 +147,27 @@ class WhisperRecognizer:
         return Transcript(
             " ".join(text for text in texts if text), None if no_speech is None else 1.0 - no_speech
         )
+
+    def _within(self, forms: PhraseForms, audio: np.ndarray, run: onnxruntime.RunOptions) -> Transcript:
+        """The phrase of the grammar said in ``audio`` (at most 30 s), or none."""
+        cross = self._model.encode(whisper_log_mel(audio, self._manifest.mel_bands), run)
+        free = whisper_greedy(DecoderSession(self._model, cross, run), self._prompt, self._manifest)
+        owners: List[Tuple[str, List[int]]] = [
+            (phrase, tokens) for phrase, each in forms.items() for tokens in each
+        ]
+        scores = score_phrases(
+            self._model, cross, self._prompt, [tokens for _, tokens in owners], self._manifest, run
+        )
+        best: Dict[str, float] = {}
+        for (phrase, _), score in zip(owners, scores):
+            best[phrase] = max(score, best.get(phrase, -np.inf))
+        choice = GrammarChoice(
+            text_of(free.tokens, self._pieces, self._manifest.timestamp_begin),
+            free.score,
+            best,
+        )
+        no_speech = free.no_speech_prob
+        return choice.transcript(self._threshold, None if no_speech is None else 1.0 - no_speech)
 
     def stop(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""

@@ -1,0 +1,98 @@
+"""Scoring a grammar's phrases by teacher forcing: a phrase's exact log-probability under the model,
+log P(its tokens, then eot | prompt, audio), by Whisper's decoding rules as ``whisper_greedy``
+applies them, so that it compares with the score of the model's own greedy text (``WhisperResult``).
+
+The prompt's decoder pass is shared: it runs once, then each phrase's tokens run in one decoder
+call from a fork of the prompt's key/value cache.
+"""
+
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+import onnxruntime
+
+from speech_event.errors import ModelError
+from speech_event.recognizers.onnx.hypothesis import log_softmax
+from speech_event.recognizers.whisper.greedy import whisper_logits
+from speech_event.recognizers.whisper.manifest import WhisperManifest
+from speech_event.recognizers.whisper.model import DecoderSession, WhisperModel
+
+
+def phrase_variants(phrase: str) -> List[str]:
+    """The texts Whisper may write a phrase as, to score each: after a leading space (Whisper's text
+    starts with one), the first letter lower and capital, each without and with a final "." (Whisper
+    writes "go left" as " Go left."), duplicates left out, in that order. Words are parted by single
+    spaces; a final "." given is taken as the one Whisper may add."""
+    stem = " ".join(phrase.split()).rstrip(".")
+    if not stem:
+        raise ValueError(f"the phrase {phrase!r} has no words")
+    forms = [f" {first}{stem[1:]}{end}" for first in (stem[0].lower(), stem[0].upper()) for end in ("", ".")]
+    return list(dict.fromkeys(forms))
+
+
+def phrase_tokens(text: str, pieces: Sequence[bytes], text_tokens: int) -> List[int]:
+    """``text``'s UTF-8 bytes as tokens, the longest piece that matches taken from the left, among
+    the text tokens only (ids below ``text_tokens``: a model's first special token, Whisper's eot),
+    so that no special token is ever spelt. Whisper's byte-level BPE tokenizes by its merges, which
+    an exported directory does not hold: longest match is an approximation that is often, not
+    always, the canonical tokenization, and the model gives a non-canonical one less probability.
+    ModelError names the text and where no piece matches."""
+    ids: Dict[bytes, int] = {}
+    for token, piece in enumerate(pieces[:text_tokens]):
+        if piece:
+            ids.setdefault(piece, token)
+    longest = max(map(len, ids), default=0)
+    data = text.encode("utf-8")
+    tokens: List[int] = []
+    start = 0
+    while start < len(data):
+        end = next(
+            (end for end in range(min(len(data), start + longest), start, -1) if data[start:end] in ids),
+            None,
+        )
+        if end is None:
+            raise ModelError(
+                f"the model's text tokens cannot spell {text!r}: none matches its UTF-8 from {data[start:]!r}"
+            )
+        tokens.append(ids[data[start:end]])
+        start = end
+    return tokens
+
+
+def forced_log_likelihood(logits: np.ndarray, tokens: Sequence[int], manifest: WhisperManifest) -> float:
+    """log P(tokens, then eot) from ``logits`` [len(tokens) + 1, vocabulary]: row i the decoder's
+    logits before the i-th of tokens + [eot] (row 0: those of the prompt's last position). Each row
+    is masked as ``whisper_greedy`` masks it before its log-softmax; -inf when a token is masked."""
+    targets = [*tokens, manifest.eot]
+    if len(logits) != len(targets):
+        raise ValueError(f"{len(logits)} rows of logits for {len(targets)} tokens (eot included)")
+    return sum(
+        float(log_softmax(whisper_logits(row, position == 0, manifest))[target])
+        for position, (row, target) in enumerate(zip(logits, targets))
+    )
+
+
+def score_phrases(
+    model: WhisperModel,
+    cross: Dict[str, np.ndarray],
+    prompt: Sequence[int],
+    sequences: Sequence[Sequence[int]],
+    manifest: WhisperManifest,
+    run: Optional[onnxruntime.RunOptions] = None,
+) -> List[float]:
+    """Each token sequence's ``forced_log_likelihood`` after ``prompt`` given the audio's ``cross``
+    (``WhisperModel.encode``): one decoder call for the prompt, then one per non-empty sequence, all
+    its tokens at once from a fork of the prompt's cache. An empty sequence is eot at the first
+    position, which Whisper's rules rule out: -inf."""
+    session = DecoderSession(model, cross, run)
+    after_prompt = session(prompt)[-1:]
+    scores: List[float] = []
+    for tokens in sequences:
+        if len(prompt) + len(tokens) > manifest.text_context:
+            raise ValueError(
+                f"{len(tokens)} tokens after a prompt of {len(prompt)} exceed the decoder's "
+                f"{manifest.text_context} positions"
+            )
+        logits = np.concatenate([after_prompt, session.fork()(tokens)]) if tokens else after_prompt
+        scores.append(forced_log_likelihood(logits, tokens, manifest))
+    return scores

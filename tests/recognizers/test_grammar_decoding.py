@@ -1,0 +1,117 @@
+"""Grammar decoding on the neural engines (NeMo RNN-T, TDT, CTC and Whisper over the tones models)
+and the tones engine: phrases said, near misses rejected with the nearest phrase named, the
+threshold, and grammars an engine cannot take."""
+
+from typing import Callable, Dict, List, Optional, Tuple
+
+import pytest
+
+from fixtures.audio import speak_tones
+from fixtures.tones_model import tones_ctc_model_directory, tones_model_directory, tones_tdt_model_directory
+from fixtures.whisper_tones_model import whisper_tones_model_directory
+from speech_event.errors import GrammarError
+from speech_event.grammar import Grammar, jsgf_grammar, requested_grammar
+from speech_event.ports import Grammars, Transcript
+from speech_event.recognizers.nemo.recognizer import NemoRecognizer
+from speech_event.recognizers.onnx.grammar_choice import GrammarChoice, spelt
+from speech_event.recognizers.tones import ToneRecognizer
+from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+
+COMMANDS = requested_grammar("go left|stop|go to the kitchen|yes|no")
+Build = Callable[[Optional[Grammar], float], Grammars]
+ENGINES: Dict[str, Build] = {
+    "nemo_rnnt": lambda grammar, threshold: NemoRecognizer(
+        tones_model_directory(), False, grammar, threshold
+    ),
+    "nemo_tdt": lambda grammar, threshold: NemoRecognizer(
+        tones_tdt_model_directory(), False, grammar, threshold
+    ),
+    "nemo_ctc": lambda grammar, threshold: NemoRecognizer(
+        tones_ctc_model_directory(), False, grammar, threshold
+    ),
+    "whisper": lambda grammar, threshold: WhisperRecognizer(
+        whisper_tones_model_directory(), "english", False, grammar, threshold
+    ),
+}
+# said -> the phrase published ("" none), and the phrase named as rejected
+OUTCOMES: List[Tuple[str, str, Optional[str]]] = [
+    ("go left", "go left", None),
+    ("stop", "stop", None),
+    ("go to the kitchen", "go to the kitchen", None),
+    ("go lefts", "", "go left"),  # a letter more
+    ("go lift", "", "go left"),  # a letter changed
+    ("stops", "", "stop"),
+    ("go to the kitchens", "", "go to the kitchen"),
+    ("yess", "", "yes"),
+]
+
+
+def _transcribe(engine: Grammars, said: str) -> Transcript:
+    return engine.transcribe(speak_tones(said, 16000))  # type: ignore[attr-defined, no-any-return]
+
+
+@pytest.mark.parametrize("engine", list(ENGINES))
+def test_only_the_phrase_said_is_the_text_and_near_misses_are_rejected_naming_the_nearest(
+    engine: str,
+) -> None:
+    recognizer = ENGINES[engine](COMMANDS, -5.0)
+    found = [(said, _transcribe(recognizer, said)) for said, _, _ in OUTCOMES]
+    assert [(said, transcript.text, transcript.rejected) for said, transcript in found] == OUTCOMES
+    for _, transcript in found:  # a phrase comes with its probability under the model
+        assert (transcript.confidence is not None and transcript.confidence > 0.9) == (transcript.text != "")
+
+
+@pytest.mark.parametrize("engine", ["nemo_rnnt", "nemo_tdt", "nemo_ctc", "whisper"])
+def test_a_threshold_lenient_enough_publishes_a_near_miss_as_its_nearest_phrase(engine: str) -> None:
+    recognizer = ENGINES[engine](COMMANDS, -1e6)
+    assert _transcribe(recognizer, "go lefts").text == "go left"
+    assert _transcribe(recognizer, "hello").text != ""  # some phrase, however unlikely
+
+
+@pytest.mark.parametrize("engine", list(ENGINES))
+def test_the_grammar_can_be_switched_and_dropped(engine: str) -> None:
+    recognizer = ENGINES[engine](None, -5.0)
+    assert _transcribe(recognizer, "maybe").text == "maybe"
+    recognizer.use_grammar(requested_grammar("yes|no"))
+    assert _transcribe(recognizer, "maybe") == Transcript("", rejected="no")
+    recognizer.use_grammar(None)
+    assert _transcribe(recognizer, "maybe").text == "maybe"
+
+
+ENDLESS = jsgf_grammar("#JSGF V1.0;\ngrammar g;\npublic <g> = go left+;\n", "g.gram")
+
+
+@pytest.mark.parametrize(
+    ("engine", "name"),
+    [("nemo_rnnt", "the NeMo engine"), ("whisper", "the Whisper engine")],
+)
+def test_a_grammar_of_endless_sentences_is_refused_by_the_engines_that_score_each(
+    engine: str, name: str
+) -> None:
+    recognizer = ENGINES[engine](None, -5.0)
+    with pytest.raises(GrammarError) as error:
+        recognizer.check_grammar(ENDLESS)
+    assert str(error.value).startswith(
+        f"g.gram: more than 2000 sentences (or * and + repeats): {name} scores"
+    )
+
+
+def test_the_tones_engine_takes_a_grammar_as_the_real_engines_do() -> None:
+    engine = ToneRecognizer(COMMANDS)
+    assert isinstance(engine, Grammars)
+    assert [engine.transcribe(speak_tones(said, 16000)) for said in ("stop", "stops", "")] == [
+        Transcript("stop"),
+        Transcript("", rejected="stop"),
+        Transcript(""),  # nothing heard is not out of the grammar
+    ]
+
+
+def test_the_choice_takes_the_free_text_when_it_is_a_phrase_else_the_best_phrase_within_the_threshold() -> (
+    None
+):
+    scores = {"go left": -12.0, "stop": -30.0}
+    assert GrammarChoice(" Go left.", -11.0, scores).transcript(-0.5) == Transcript("go left")
+    assert GrammarChoice("go lefts", -10.0, scores).ratio("go left") == -2.0
+    assert GrammarChoice("go lefts", -10.0, scores).transcript(-2.0, 0.5) == Transcript("go left", 0.5)
+    assert GrammarChoice("go lefts", -10.0, scores).transcript(-1.9) == Transcript("", rejected="go left")
+    assert spelt(" Go, LEFT! now's") == "go left now's"
