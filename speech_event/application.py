@@ -111,7 +111,7 @@ def without_remappings(argv: Optional[List[str]]) -> List[str]:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    """The ``speech-event`` command (the node, or export-nemo, export-whisper); returns its exit status."""
+    """The ``speech-event`` command (the node, or export-nemo, export-whisper, pull); returns its status."""
     raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
         from speech_event.exporters.nemo import main as export_nemo
@@ -121,6 +121,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         from speech_event.exporters.whisper import main as export_whisper
 
         return export_whisper(raw[1:])
+    if raw[:1] == ["pull"]:
+        from speech_event.models.pull import main as pull
+
+        return pull(raw[1:])
     arguments = _arguments(raw)
     try:
         config = load_config(arguments.config) if arguments.config else SpeechEventConfig()
