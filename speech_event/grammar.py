@@ -20,6 +20,7 @@ from typing import Dict, FrozenSet, List, Optional, Set, Tuple
 from speech_event.errors import GrammarError
 
 MAX_SENTENCES = 2000
+FREE_SPEECH = "none (free speech)"  # how logs, /diagnostics and the window say no grammar is in force
 _WORD = re.compile(r"^[a-z']+$")
 _TOKEN = re.compile(r"<[^<>\s]+>|/[^/]*/|\{[^}]*\}|[()\[\]|*+;=]|[^\s()\[\]|*+;=<>/{}]+")
 _COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.DOTALL)

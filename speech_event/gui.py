@@ -20,7 +20,8 @@ import tkinter as tk
 from typing import Callable, List, Optional, Tuple
 
 from speech_event.application import without_remappings
-from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, FREE_SPEECH
+from speech_event.grammar import FREE_SPEECH
+from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     SET_ENABLED,

@@ -21,7 +21,7 @@ from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ConfigError, GrammarError
-from speech_event.grammar import Grammar, load_grammar
+from speech_event.grammar import FREE_SPEECH, Grammar, load_grammar
 from speech_event.health import Health
 from speech_event.interfaces.action import ACTION_NAME, DISABLED, ListenAction
 from speech_event.interfaces.diagnostics import (
@@ -339,7 +339,7 @@ class SpeechEventNode:
         with self._lock:  # utterances closed before this finish with the old grammar
             self._speculation.drop()
             self._grammar = grammar
-        _LOG.info("speechEvent grammar: %s", "none (free speech)" if grammar is None else grammar.source)
+        _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)
 
     def _in_force(self) -> Tuple[str, Recognizer, Optional[Grammar]]:
         """The language, engine and grammar in use now."""

@@ -10,6 +10,7 @@ import threading
 from dataclasses import dataclass, field
 from typing import Dict, List, Tuple
 
+from speech_event.grammar import FREE_SPEECH
 from speech_event.messages import DiagnosticArray, DiagnosticStatus, KeyValue
 from speech_event.ports import PublisherStatus
 
@@ -18,7 +19,6 @@ STATUS_NAME = "speechEvent"
 # Why an utterance was not transcribed: the node was disabled, and the speech screen's reasons.
 DISCARDED_WHILE_DISABLED = "disabled"
 DISCARDED_BACKLOG = "backlog"  # dropped unrecognized to keep within max_backlog
-FREE_SPEECH = "none (free speech)"  # the "grammar" value when none is in force
 
 
 @dataclass

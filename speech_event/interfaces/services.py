@@ -19,7 +19,7 @@ import logging
 from typing import Callable, Optional, Tuple
 
 from speech_event.errors import GrammarError, ModelError
-from speech_event.grammar import Grammar, requested_grammar
+from speech_event.grammar import FREE_SPEECH, Grammar, requested_grammar
 from speech_event.interfaces.language_engines import LanguageEngines
 from speech_event.messages import SetEnabledResponse, SetGrammarResponse, SetLanguageResponse
 from speech_event.ports import Grammars, Recognizer
@@ -121,7 +121,7 @@ class RuntimeControl:
                 "%s: %s; the grammar in force stays: %s",
                 SET_GRAMMAR_SERVICE,
                 reason,
-                "none (free speech)" if in_force is None else in_force.source,
+                FREE_SPEECH if in_force is None else in_force.source,
             )
             return SetGrammarResponse(REJECTED)
         self._use_grammar(grammar)

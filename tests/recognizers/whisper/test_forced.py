@@ -10,13 +10,12 @@ from typing import Callable, Dict, List, Sequence, Tuple
 import numpy as np
 import onnx
 import pytest
-from onnx import TensorProto, helper
+from onnx import helper
 
 from fixtures.audio import speak_tones
-from fixtures.transducer_model import onnx_model, tensor
+from fixtures.transducer_model import tensor
 from fixtures.whisper_tones_model import (
     EOT,
-    FRAMES,
     MANIFEST,
     NO_SPEECH,
     PIECES,
@@ -24,6 +23,7 @@ from fixtures.whisper_tones_model import (
     TIMESTAMP_BEGIN,
     VOCABULARY,
     WIDTH,
+    decoder_model,
     whisper_tones_model_directory,
 )
 from speech_event.errors import ModelError
@@ -121,24 +121,7 @@ def _history_decoder(seed: int) -> onnx.ModelProto:
         tensor("end_i", np.array([np.iinfo(np.int64).max], np.int64)),
         tensor("positions_axis", np.array(3, np.int64)),
     ]
-    cache = [1, 1, 1, "past", WIDTH]
-    return onnx_model(
-        "history_decoder",
-        nodes,
-        [
-            helper.make_tensor_value_info("tokens", TensorProto.INT64, [1, "n"]),
-            helper.make_tensor_value_info("self_k", TensorProto.FLOAT, cache),
-            helper.make_tensor_value_info("self_v", TensorProto.FLOAT, cache),
-            helper.make_tensor_value_info("cross_k_0", TensorProto.FLOAT, [1, 1, WIDTH, FRAMES]),
-            helper.make_tensor_value_info("cross_v_0", TensorProto.FLOAT, [1, 1, FRAMES, WIDTH]),
-        ],
-        [
-            helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, "n", VOCABULARY]),
-            helper.make_tensor_value_info("new_self_k", TensorProto.FLOAT, [1, 1, 1, "positions", WIDTH]),
-            helper.make_tensor_value_info("new_self_v", TensorProto.FLOAT, [1, 1, 1, "positions", WIDTH]),
-        ],
-        initializers,
-    )
+    return decoder_model("history_decoder", nodes, initializers)
 
 
 def test_forcing_is_exact_where_the_logits_depend_on_every_token_before(tmp_path: Path) -> None:
