@@ -23,6 +23,7 @@ MAX_SENTENCES = 2000
 FREE_SPEECH = "none (free speech)"  # how logs, /diagnostics and the window say no grammar is in force
 _WORD = re.compile(r"^[a-z']+$")
 _TOKEN = re.compile(r"<[^<>\s]+>|/[^/]*/|\{[^}]*\}|[()\[\]|*+;=]|[^\s()\[\]|*+;=<>/{}]+")
+_OPERATORS = ("(", ")", "[", "]", "|", "*", "+", "=", ";")
 _COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.DOTALL)
 
 Sentences = FrozenSet[Tuple[str, ...]]
@@ -40,6 +41,15 @@ class Grammar:
     jsgf: str
     # Every sentence, lower-case words parted by one space; None when more than MAX_SENTENCES or endless.
     phrases: Optional[Tuple[str, ...]]
+
+    def words(self) -> Tuple[str, ...]:
+        """Every word its sentences may use, sorted: what an engine's dictionary must hold."""
+        if self.phrases is not None:
+            return tuple(sorted({word for phrase in self.phrases for word in phrase.split()}))
+        rules, _ = _rules(self.jsgf, self.source)
+        return tuple(
+            sorted({token.lower() for tokens in rules.values() for token in tokens if _is_word(token)})
+        )
 
     def sentences(self, engine: str) -> Tuple[str, ...]:
         """The sentences, for an engine that scores each one; GrammarError when there are too many."""
@@ -182,7 +192,7 @@ def _sequence(
                 item = _expand(rules[name], rules, source, (*seen, name))
         elif token in ("*", "+"):
             raise _TooMany
-        elif token in (")", "]", "|", "=", ";"):
+        elif not _is_word(token):
             raise GrammarError(f"{source}: unexpected {token!r} in the grammar")
         else:
             word = token.lower()
@@ -195,6 +205,21 @@ def _sequence(
         if len(sentences) > MAX_SENTENCES:
             raise _TooMany
     return frozenset(sentences)
+
+
+def _is_word(token: str) -> bool:
+    """Whether a JSGF token is a word, not a rule, weight, tag, bracket or operator."""
+    return not token.startswith(("<", "/", "{")) and token not in (
+        "(",
+        ")",
+        "[",
+        "]",
+        "|",
+        "*",
+        "+",
+        "=",
+        ";",
+    )
 
 
 def _closing(tokens: List[str], opening: int, source: str) -> int:

@@ -142,3 +142,14 @@ def test_a_grammar_that_cannot_be_used_says_why(tmp_path: Path, make, message: s
 def test_grammars_of_the_same_phrases_are_equal_so_engines_compile_each_once() -> None:
     assert requested_grammar("yes|no") == phrases_grammar(["yes", "no"], "yes|no")
     assert hash(requested_grammar("yes|no")) == hash(phrases_grammar(["yes", "no"], "yes|no"))
+
+
+def test_a_grammars_words_are_those_of_its_sentences_even_when_they_are_too_many_to_list() -> None:
+    assert requested_grammar("go left|Go right|stop").words() == ("go", "left", "right", "stop")  # type: ignore[union-attr]
+    endless = jsgf_grammar(
+        "#JSGF V1.0;\ngrammar g;\n/* a comment */\npublic <g> = (Go | walk) <dir>+ [now] {tag} /2/;\n"
+        "<dir> = left | right;\n",
+        "g.gram",
+    )
+    assert endless.phrases is None
+    assert endless.words() == ("go", "left", "now", "right", "walk")

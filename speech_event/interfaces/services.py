@@ -71,15 +71,10 @@ class RuntimeControl:
             return SetLanguageResponse(ACCEPTED)
         try:
             engine = self._engines.engine(language)
+            grammar = self._current()[2]
+            reason = None if grammar is None else cannot_use(engine, grammar)
         except ModelError as problem:
-            _LOG.error(
-                "%s: cannot switch to %s, staying with %s: %s",
-                SET_LANGUAGE_SERVICE,
-                language,
-                self._current_language(),
-                problem,
-            )
-            return SetLanguageResponse(REJECTED)
+            reason = str(problem)
         except Exception:  # a broken model file can fail in the runtime's own ways
             _LOG.exception(
                 "%s: cannot switch to %s, staying with %s",
@@ -88,9 +83,7 @@ class RuntimeControl:
                 self._current_language(),
             )
             return SetLanguageResponse(REJECTED)
-        grammar = self._current()[2]
-        reason = None if grammar is None else cannot_use(engine, grammar)
-        if reason is not None:
+        if reason is not None:  # no engine, or one that cannot take the grammar in force
             _LOG.error(
                 "%s: cannot switch to %s, staying with %s: %s",
                 SET_LANGUAGE_SERVICE,

@@ -34,7 +34,6 @@ best).
 """
 
 import math
-import re
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Dict, Iterator, List, Mapping, Optional, Union
@@ -70,8 +69,6 @@ _FREE_SETTINGS: Mapping[str, _Setting] = {
     "fwdflat": False,
     "maxhmmpf": 1500,
 }
-_JSGF_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.DOTALL)
-_JSGF_NOT_WORDS = re.compile(r"<[^<>]*>|\{[^}]*\}|/[^/]*/|[()\[\]|*+]")
 
 
 class SphinxRecognizer:
@@ -128,7 +125,7 @@ class SphinxRecognizer:
         if grammar.jsgf in self._searches:
             return
         decoder = self._grammars()
-        unknown = [word for word in _grammar_words(grammar) if decoder.lookup_word(word) is None]
+        unknown = [word for word in grammar.words() if decoder.lookup_word(word) is None]
         if unknown:
             raise GrammarError(
                 f"{grammar.source}: words not in pocketsphinx's English dictionary: {', '.join(unknown)}"
@@ -255,14 +252,3 @@ def _language_model() -> str:
 def _nats(score: float) -> float:
     """A path score as its binding hands it out, in nats (-inf when it underflowed)."""
     return math.log(score) * _SCORE_SCALE if score > 0.0 else -math.inf
-
-
-def _grammar_words(grammar: Grammar) -> List[str]:
-    """The words a grammar's sentences are made of, as pocketsphinx looks them up."""
-    if grammar.phrases is not None:
-        return sorted({word for phrase in grammar.phrases for word in phrase.split()})
-    words = set()
-    for statement in _JSGF_COMMENT.sub(" ", grammar.jsgf).split(";"):
-        if "=" in statement:
-            words.update(_JSGF_NOT_WORDS.sub(" ", statement.split("=", 1)[1]).split())
-    return sorted(words)
