@@ -209,6 +209,7 @@ class SpeechEventNode:
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
             arrival = self._clock.now()
+            self._turn.end_pause_if_over()  # first: a speculation on the utterance it ends still counts
             self._speculation.drop()  # more audio: what it transcribed is not the utterance
             if self._assembler.pending_samples == 0:
                 self._collecting_since = arrival
@@ -314,6 +315,7 @@ class SpeechEventNode:
         is the robot's own voice); enabled again, the node starts clean. Health checks go on, and
         recognitions already handed over still publish."""
         with self._lock:
+            self._turn.end_pause_if_over()  # an utterance already over is no robot's voice
             changed = enabled != self._enabled
             self._enabled = enabled
             if not enabled:
@@ -331,12 +333,14 @@ class SpeechEventNode:
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         with self._lock:  # utterances closed before this finish with the old engine
+            self._turn.end_pause_if_over()
             self._speculation.drop()
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
         with self._lock:  # utterances closed before this finish with the old grammar
+            self._turn.end_pause_if_over()
             self._speculation.drop()
             self._grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)

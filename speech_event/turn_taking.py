@@ -5,7 +5,8 @@ An utterance ends ``speech_pause_period`` after its latest block, or ``early_pau
 a speculation found a complete answer (early end of turn). Speculation may start
 ``speculation_gap`` after the latest block. Each is one timer per utterance, not one per block:
 set at the first block, and when it fires early (more blocks came since) set again for the time
-after the latest block. Every method is called under the node's lock; the timers take it.
+after the latest block; a block that arrives once the pause is over, before its timer fired, ends
+the utterance first. Every method is called under the node's lock; the timers take it.
 """
 
 import functools
@@ -53,6 +54,13 @@ class RearmingTimer:
         if timer is not None:
             timer.cancel()
 
+    def fire_if_over(self) -> None:
+        """Under the lock: call ``on_due`` now if the clock has reached ``due()`` but the timer has
+        not fired yet (its thread is late: a busy machine)."""
+        if self._timer is not None and self.clock.now() >= self.due():
+            self.cancel()
+            self.on_due()
+
     def _fire(self, setting: int) -> None:
         with self.lock:
             if self._timer is None or setting != self._setting:
@@ -90,6 +98,12 @@ class TurnTaking:
         self._pause.arm()
         if self._config.speculative_recognition:
             self._gap.arm()
+
+    def end_pause_if_over(self) -> None:
+        """Before a block is taken: if the pause after the latest block is over, the utterance ends
+        now, although its timer has not fired yet, so the block starts the next utterance. Where
+        utterances end then depends on when blocks arrive, never on how late a timer thread runs."""
+        self._pause.fire_if_over()
 
     def end_early(self) -> None:
         """A speculation found a complete answer: the turn ends after early_pause (when set)."""

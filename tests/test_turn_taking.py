@@ -190,6 +190,32 @@ def test_a_callback_of_a_timer_cancelled_while_it_waited_for_the_lock_does_nothi
     assert fired == []
 
 
+def test_a_timer_over_due_fires_when_asked_and_its_late_thread_then_does_nothing() -> None:
+    clock = ManualClock()
+    lock = threading.Lock()
+    fired: List[float] = []
+    timer = RearmingTimer(clock, lock, lambda: 2.0, lambda: fired.append(clock.now()))
+    timer.arm()
+    clock.time = 1.999
+    timer.fire_if_over()
+    assert fired == []
+    clock.time = 2.0  # due, but its thread has not run (a busy machine)
+    timer.fire_if_over()
+    assert fired == [2.0]
+    assert not timer.armed
+    clock.callbacks[0]()  # the late thread runs at last
+    assert fired == [2.0]
+
+
+def test_fire_if_over_leaves_an_unarmed_timer_alone() -> None:
+    clock = ManualClock()
+    fired: List[float] = []
+    timer = RearmingTimer(clock, threading.Lock(), lambda: 2.0, lambda: fired.append(clock.now()))
+    clock.time = 3.0
+    timer.fire_if_over()
+    assert fired == []
+
+
 # -- TurnTaking -------------------------------------------------------------------------------------
 
 CONFIG = SpeechEventConfig(speech_pause_period=1.5, speculation_gap=0.25, early_pause=0.0)
@@ -363,3 +389,25 @@ def test_gap_passed_comes_at_the_gap(
     assert not turn.turn.gap_passed()
     turn.clock.advance_to(at)
     assert turn.turn.gap_passed()
+
+
+@pytest.mark.parametrize(
+    ("config", "early", "now", "ends"),
+    [
+        pytest.param(CONFIG, False, 1.4375, [], id="before_the_pause_is_over_nothing_ends"),
+        pytest.param(CONFIG, False, 1.5, [1.5], id="once_the_pause_is_over_the_utterance_ends"),
+        pytest.param(EARLY, True, 0.5, [0.5], id="an_early_pause_over_ends_it_too"),
+    ],
+)
+def test_a_block_after_the_pause_ends_the_utterance_although_the_timer_is_late(
+    config: SpeechEventConfig, early: bool, now: float, ends: List[float]
+) -> None:
+    clock = ManualClock()  # no timer fires unless the test runs it: the timer thread is late
+    turn_ends: List[float] = []
+    turn = TurnTaking(config, clock, threading.Lock(), lambda: turn_ends.append(clock.now()), lambda: None)
+    turn.heard(0.0)
+    if early:
+        turn.end_early()
+    clock.time = now
+    turn.end_pause_if_over()
+    assert turn_ends == ends

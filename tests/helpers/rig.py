@@ -27,8 +27,9 @@ class Rig:
         build_engine: Optional[EngineBuilder] = None,
         job_seconds: float = 0.0,
         stopwatch: Optional[Callable[[], float]] = None,
+        clock: Optional[FakeClock] = None,
     ) -> None:
-        self.clock = FakeClock()
+        self.clock = clock or FakeClock()
         self.bus = InMemoryBus()
         self.published: List[Tuple[float, str]] = []
         self.diagnostics: List[DiagnosticArray] = []
