@@ -57,6 +57,7 @@ from speech_event.messages import (
 )
 
 ROOT = Path(__file__).resolve().parents[2]
+CLOCK_TOPIC = "/clock"
 NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"
 STARTUP_TIMEOUT = 60.0
 # Our node sets this to the ROS time it started (its health checks count from there).
@@ -127,7 +128,7 @@ class RosReplay:
         )
         rospy.set_param("/use_sim_time", not options.real_time)
         rospy.init_node("speechEventReplay", disable_signals=True)
-        self._clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+        self._clock = rospy.Publisher(CLOCK_TOPIC, Clock, queue_size=10, latch=True)
         self._outcome = Outcome()
         self._now = 0.0
         self._wall_start = time.monotonic()
@@ -137,6 +138,7 @@ class RosReplay:
         # A goal handle must be kept, or actionlib stops tracking its goal.
         self._goals: List[actionlib.ClientGoalHandle] = []
         self._schedule = Schedule(Outcome())  # of the scenario being played
+        self._node_uri: Optional[str] = None  # the node under test, once it runs
 
     def _scenario_time(self) -> float:
         """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
@@ -151,9 +153,26 @@ class RosReplay:
         self._now = when
         if self._options.real_time:
             time.sleep(max(0.0, self._wall_start + when - time.monotonic()))
-        else:
-            self._clock.publish(Clock(clock=rospy.Time.from_sec(when)))
-            time.sleep(TIMER_SETTLE)
+            return
+        # The node hears /clock and the signal on connections of their own: a block sent after a
+        # clock step may be taken before the step on a busy machine (its arrival time then wrong),
+        # so the step must have reached the node first.
+        received = self._clock_received()
+        self._clock.publish(Clock(clock=rospy.Time.from_sec(when)))
+        if received is not None:
+            wait_until(
+                lambda: (self._clock_received() or 0) > received,
+                f"the node under test to receive the clock step to {when:.3f} s",
+            )
+        time.sleep(TIMER_SETTLE)
+
+    def _clock_received(self) -> Optional[int]:
+        """The clock messages the node under test has received; None before it runs or when it
+        does not hear /clock (a node timed by the wall clock)."""
+        if self._node_uri is None:
+            return None
+        connections = self._live_connections(self._node_uri, CLOCK_TOPIC)
+        return sum(int(connection[2]) for connection in connections) if connections else None
 
     def settle(self, played: int, final: bool) -> None:
         """Wait (a while) for what the node published in memory by now, before the next event.
@@ -253,7 +272,7 @@ class RosReplay:
         time.sleep(max(0.0, self._wall_start - time.monotonic()))
         self._outcome = Outcome()  # what the node said before the scenario's t = 0 is no part of it
 
-    def _node_uri(self) -> str:
+    def _find_node(self) -> str:
         _, subscribers, _ = self._master.getSystemState()
         nodes = [node for topic, names in subscribers if topic == SIGNAL_TOPIC for node in names]
         others = [node for node in nodes if node != "/speechEventReplay"]
@@ -269,8 +288,8 @@ class RosReplay:
         listening = any(topic == SIGNAL_TOPIC and names for topic, names in subscribers)
         return listening and self._text_subscriber.get_num_connections() > 0
 
-    def _live_connections(self, node_uri: str) -> List[Any]:
-        """The node's live connections on the signal topic, as getBusStats gives them:
+    def _live_connections(self, node_uri: str, topic: str = SIGNAL_TOPIC) -> List[Any]:
+        """The node's live connections on ``topic``, as getBusStats gives them:
         [connection id, bytes received, messages received, drop estimate, connected]."""
         proxy = xmlrpc.client.ServerProxy(node_uri)
         try:
@@ -280,9 +299,7 @@ class RosReplay:
                 f"the node under test at {node_uri} did not answer getBusStats: {problem}"
             ) from None
         subscriptions = stats[2][1]
-        return [
-            c for topic, connections in subscriptions if topic == SIGNAL_TOPIC for c in connections if c[4]
-        ]
+        return [c for name, connections in subscriptions if name == topic for c in connections if c[4]]
 
     # -- playing ----------------------------------------------------------------------------------
 
@@ -291,6 +308,7 @@ class RosReplay:
         self._schedule = Schedule.of(scenario)
         self._outcome = Outcome()
         self._goals = []
+        self._node_uri = None  # the last scenario's node is gone, also when it failed
         self.advance_to(0.0)
         with contextlib.suppress(KeyError):
             rospy.delete_param(START_TIME_PARAM)  # the last scenario's node said it
@@ -298,7 +316,7 @@ class RosReplay:
         self._wait_for_node(node)
         if any(isinstance(event, SendGoal) for event in timeline.events):
             self._wait_for_the_action_server()
-        node_uri = self._node_uri()
+        node_uri = self._node_uri = self._find_node()
         stand_ins = StandIns(
             self.processes,
             scenario.source,
@@ -311,6 +329,7 @@ class RosReplay:
         # What was observed by the end of the timeline, before anything is torn down: a health
         # check between stopping soundDetection and stopping the node is no part of the scenario.
         outcome, self._outcome = self._outcome, Outcome()
+        self._node_uri = None
         stand_ins.stop()
         self.processes.stop(node)
         return outcome
