@@ -9,7 +9,8 @@ tones fixture model);
 Parakeet-TDT 0.6B-shaped, Whisper base and small), each in a process of its own: load time,
 real-time factor on 5 and 10 s of speech, peak resident memory, and what ``cuda true`` does on a
 machine without CUDA. The models come from ``bench/family_models.py`` (needs NeMo and
-openai-whisper, once): SPEECH_EVENT_FAMILY_MODELS=DIR names where it wrote them.
+openai-whisper, once): SPEECH_EVENT_FAMILY_MODELS=DIR names where it wrote them;
+(e) fp32 against int8 on those models, on 2 cores and on 1, beside onnx-asr (bench/int8.py).
 """
 
 import logging
@@ -239,3 +240,6 @@ if __name__ == "__main__":
     recorded_speech()
     nemo_engine()
     family_models()
+    from bench.int8 import figures  # here: bench/int8.py imports this module
+
+    figures()

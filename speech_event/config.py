@@ -38,6 +38,8 @@ class SpeechEventConfig:
     audio_storage_dir: str = ""
     audio_storage_max_mb: float = 500.0
     cuda: bool = False
+    # int8: run the model's int8 files (speech-event export-nemo/export-whisper --int8, pull --int8).
+    quantization: str = "none"
     sample_rate: int = 48000
     speech_pause_period: float = 1.5
     max_utterance_length: float = 10.0
@@ -81,6 +83,7 @@ class SpeechEventConfig:
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
+QUANTIZATIONS = ("none", "int8")
 # soundDetection's block: 4096 samples (85 ms at 48 kHz); blocks of one utterance come this far apart.
 SOUND_DETECTION_BLOCK = 4096
 
@@ -140,6 +143,7 @@ _FORMAT = KeyValueFormat(
         "audio_storage_dir": KeyRule(text, "a directory path, or nothing to store no audio"),
         "audio_storage_max_mb": KeyRule(number(float, 1.0, 10.0**7), "a number of MiB, 1 or more"),
         "cuda": KeyRule(boolean, "true or false"),
+        "quantization": KeyRule(choice(*QUANTIZATIONS), " or ".join(QUANTIZATIONS)),
         "sample_rate": KeyRule(number(int, 8000, 192000), "an integer number of Hz from 8000 to 192000"),
         # Below 0.2 s the gaps inside speech end utterances: words come out cut into letters.
         "speech_pause_period": seconds(0.2, 60.0),

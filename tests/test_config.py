@@ -65,6 +65,10 @@ def test_the_robot_camel_case_keys_are_aliases() -> None:
         ),
         ("cuda yes", "f.ini:1: key 'cuda': value 'yes' is not a boolean; allowed: true or false"),
         (
+            "quantization fp16",
+            "f.ini:1: key 'quantization': value 'fp16' is not one of the choices; allowed: none or int8",
+        ),
+        (
             "speech_pause_period nan",
             "f.ini:1: key 'speech_pause_period': value 'nan' is not a number; "
             "allowed: a number of seconds from 0.2 to 60.0",
@@ -79,14 +83,14 @@ def test_the_robot_camel_case_keys_are_aliases() -> None:
         (
             "speech_pause 1.0",
             "f.ini:1: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are "
-            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, sample_rate, "
+            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, "
             "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
             "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers",
         ),
         (
             "samplerate 16000",
             "f.ini:1: unknown key 'samplerate': did you mean 'sample_rate'? known keys are "
-            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, sample_rate, "
+            "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, "
             "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
             "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers",
         ),

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Sequence
 
 from speech_event.errors import ModelError
+from speech_event.exporters.quantize import INT8_HELP, quantize_and_say
 from speech_event.recognizers.nemo.features import FeatureSettings
 from speech_event.recognizers.nemo.manifest import (
     CONFORMER_TRANSDUCER,
@@ -144,6 +145,7 @@ def main(argv: List[str]) -> int:
         choices=NEMO_FAMILIES,
         help="the robot's model setting it serves (default: from the model)",
     )
+    parser.add_argument("--int8", action="store_true", help=INT8_HELP)
     arguments = parser.parse_args(argv)
     try:
         manifest = export(arguments.nemo, arguments.out_dir, arguments.head, arguments.family)
@@ -152,4 +154,6 @@ def main(argv: List[str]) -> int:
         return 2
     written = f"wrote {arguments.out_dir} ({manifest.family}, {manifest.decoding})"
     print(f"{written}: set model {manifest.family}, and rw_model_path or en_model_path to it")
+    if arguments.int8:
+        quantize_and_say(arguments.out_dir)
     return 0

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
 from speech_event.errors import ModelError
+from speech_event.exporters.quantize import INT8_HELP, quantize_and_say
 from speech_event.recognizers.whisper.manifest import (
     MANIFEST_FILE,
     TOKENS_FILE,
@@ -238,6 +239,7 @@ def main(argv: List[str]) -> int:
         metavar="LANGUAGE=CODE",
         help="the Whisper language code whose token the checkpoint uses for LANGUAGE (e.g. kinyarwanda=sw)",
     )
+    parser.add_argument("--int8", action="store_true", help=INT8_HELP)
     arguments = parser.parse_args(argv)
     try:
         manifest = export(arguments.checkpoint, arguments.out_dir, dict(arguments.language))
@@ -248,4 +250,6 @@ def main(argv: List[str]) -> int:
     print(
         f"wrote {arguments.out_dir} (whisper; languages {languages}): set model whisper and the model paths"
     )
+    if arguments.int8:
+        quantize_and_say(arguments.out_dir)
     return 0

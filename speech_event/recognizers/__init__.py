@@ -17,7 +17,7 @@ from speech_event.grammar import Grammar, load_grammar
 from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES
-from speech_event.recognizers.onnx.directory import family_of
+from speech_event.recognizers.onnx.directory import Runtime, family_of
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.manifest import WHISPER
 
@@ -44,6 +44,11 @@ def _model_directory(config: SpeechEventConfig) -> Path:
     return directory
 
 
+def runtime_of(config: SpeechEventConfig) -> Runtime:
+    """How the ONNX engines run their files: the ``cuda`` and ``quantization`` keys."""
+    return Runtime(cuda=config.cuda, int8=config.quantization == "int8")
+
+
 def configured_grammar(config: SpeechEventConfig) -> Optional[Grammar]:
     """The ``grammar`` key's grammar; None for free speech; GrammarError (a ModelError) when unreadable."""
     return load_grammar(Path(config.grammar)) if config.grammar else None
@@ -56,7 +61,7 @@ def nemo(config: SpeechEventConfig) -> Recognizer:
     if config.model not in NEMO_FAMILIES:
         raise ModelError(f"model {config.model} is not a NeMo family ({', '.join(NEMO_FAMILIES)})")
     return NemoRecognizer(
-        _model_directory(config), config.cuda, configured_grammar(config), config.grammar_threshold
+        _model_directory(config), runtime_of(config), configured_grammar(config), config.grammar_threshold
     )
 
 
@@ -69,7 +74,7 @@ def whisper(config: SpeechEventConfig) -> Recognizer:
     return WhisperRecognizer(
         _model_directory(config),
         config.language,
-        config.cuda,
+        runtime_of(config),
         configured_grammar(config),
         config.grammar_threshold,
     )

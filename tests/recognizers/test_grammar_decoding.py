@@ -21,16 +21,16 @@ COMMANDS = requested_grammar("go left|stop|go to the kitchen|yes|no")
 Build = Callable[[Optional[Grammar], float], Grammars]
 ENGINES: Dict[str, Build] = {
     "nemo_rnnt": lambda grammar, threshold: NemoRecognizer(
-        tones_model_directory(), False, grammar, threshold
+        tones_model_directory(), grammar=grammar, grammar_threshold=threshold
     ),
     "nemo_tdt": lambda grammar, threshold: NemoRecognizer(
-        tones_tdt_model_directory(), False, grammar, threshold
+        tones_tdt_model_directory(), grammar=grammar, grammar_threshold=threshold
     ),
     "nemo_ctc": lambda grammar, threshold: NemoRecognizer(
-        tones_ctc_model_directory(), False, grammar, threshold
+        tones_ctc_model_directory(), grammar=grammar, grammar_threshold=threshold
     ),
     "whisper": lambda grammar, threshold: WhisperRecognizer(
-        whisper_tones_model_directory(), "english", False, grammar, threshold
+        whisper_tones_model_directory(), "english", grammar=grammar, grammar_threshold=threshold
     ),
 }
 # said -> the phrase published ("" none), and the phrase named as rejected

@@ -9,7 +9,8 @@ hidden]) -> ``outputs`` (logits, last dimension V + 1, then TDT's durations), ``
 ``output_states_1``, ``output_states_2``.
 A CTC model (or a hybrid model's CTC head) is one file, ``model.onnx``: ``audio_signal`` and
 ``length`` as above -> ``logprobs`` [B, T', V + 1].
-Where only a file's int8 version is there (``encoder-model.int8.onnx``, onnx-asr's name), it is used.
+Each file may have an int8 version (``encoder-model.int8.onnx``, onnx-asr's name): the ``quantization``
+key picks it, and where only that one is there it is used (onnx/directory.py's Runtime).
 """
 
 from pathlib import Path
@@ -22,7 +23,7 @@ from speech_event.recognizers.nemo.onnx_asr_layout import CTC_FILE as CTC_FILE
 from speech_event.recognizers.nemo.onnx_asr_layout import DECODER_JOINT_FILE as DECODER_JOINT_FILE
 from speech_event.recognizers.nemo.onnx_asr_layout import ENCODER_FILE as ENCODER_FILE
 from speech_event.recognizers.nemo.onnx_asr_layout import NEMO_DIRECTORY as NEMO_DIRECTORY
-from speech_event.recognizers.nemo.onnx_asr_layout import onnx_file
+from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime
 from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session, providers
 
 CTC_OUTPUTS = {"logprobs": 3}
@@ -59,12 +60,12 @@ def _audio_inputs(features: np.ndarray) -> Dict[str, np.ndarray]:
 class TransducerModel:
     """A transducer's two ONNX files (RNN-T or TDT): the encoder, and the decoder-joint, run a step a time."""
 
-    def __init__(self, directory: Path, cuda: bool) -> None:
+    def __init__(self, directory: Path, runtime: Runtime = CPU_FP32) -> None:
         encoder_path, decoder_path = (
-            onnx_file(directory, ENCODER_FILE),
-            onnx_file(directory, DECODER_JOINT_FILE),
+            runtime.model_file(directory, ENCODER_FILE),
+            runtime.model_file(directory, DECODER_JOINT_FILE),
         )
-        execution_providers = providers(cuda)  # decided once, so a missing CUDA is said once
+        execution_providers = providers(runtime.cuda)  # decided once, so a missing CUDA is said once
         self._encoder = _session(encoder_path, execution_providers)
         self._decoder_joint = _session(decoder_path, execution_providers)
         _check(encoder_path, "inputs", self._encoder.get_inputs(), ENCODER_INPUTS)
@@ -151,9 +152,9 @@ class TransducerModel:
 class CtcModel:
     """A CTC model's one ONNX file: features in, per-frame log-probabilities out."""
 
-    def __init__(self, directory: Path, cuda: bool) -> None:
-        path = onnx_file(directory, CTC_FILE)
-        self._model = _session(path, providers(cuda))
+    def __init__(self, directory: Path, runtime: Runtime = CPU_FP32) -> None:
+        path = runtime.model_file(directory, CTC_FILE)
+        self._model = _session(path, providers(runtime.cuda))
         _check(path, "inputs", self._model.get_inputs(), ENCODER_INPUTS)
         _check(path, "outputs", self._model.get_outputs(), CTC_OUTPUTS)
 

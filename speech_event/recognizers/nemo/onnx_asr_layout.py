@@ -26,7 +26,7 @@ from typing import Any, Dict, Optional, Tuple
 
 from speech_event.errors import ModelError
 from speech_event.recognizers.nemo.vocabulary import load_vocabulary
-from speech_event.recognizers.onnx.directory import MANIFEST_FILE
+from speech_event.recognizers.onnx.directory import CPU_FP32, MANIFEST_FILE
 
 # onnx-asr's names of the decodings (its model_type)
 RNNT, TDT, CTC = "nemo-conformer-rnnt", "nemo-conformer-tdt", "nemo-conformer-ctc"
@@ -34,7 +34,6 @@ ENCODER_FILE = "encoder-model.onnx"
 DECODER_JOINT_FILE = "decoder_joint-model.onnx"
 CTC_FILE = "model.onnx"
 VOCABULARY_FILE = "vocab.txt"
-INT8_SUFFIX = ".int8.onnx"
 NEMO_DIRECTORY = (
     f"a model directory holds {ENCODER_FILE}, {DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), "
     "vocab.txt and config.json (speech-event export-nemo MODEL.nemo DIR writes one)"
@@ -52,14 +51,6 @@ NEMO_PREPROCESSOR: Dict[str, Any] = {
 ONNX_ASR_FEATURES = 80  # onnx-asr's defaults when its config.json does not say
 ONNX_ASR_SUBSAMPLING = 8
 ONNX_ASR_MAX_TOKENS = 10
-
-
-def onnx_file(directory: Path, name: str) -> Path:
-    """``name`` in ``directory``, or its int8 file (``encoder-model.int8.onnx``, onnx-asr's name)
-    when only that one is there."""
-    path = directory / name
-    int8 = path.with_name(path.name[: -len(".onnx")] + INT8_SUFFIX)
-    return int8 if not path.is_file() and int8.is_file() else path
 
 
 def is_ours(document: Dict[str, Any]) -> bool:
@@ -99,20 +90,23 @@ def _decoding(document: Dict[str, Any], directory: Path) -> Tuple[str, Optional[
     """onnx-asr's model_type, or the decoding of the files; and the joint's extra logits when read."""
     if "model_type" in document:
         return str(document["model_type"]), None
-    present = {name: onnx_file(directory, name).is_file() for name in (ENCODER_FILE, DECODER_JOINT_FILE)}
+    present = {
+        name: CPU_FP32.model_file(directory, name).is_file() for name in (ENCODER_FILE, DECODER_JOINT_FILE)
+    }
     if any(present.values()):
         for name, there in present.items():
             if not there:
                 raise ModelError(f"{directory}: missing {name}; {NEMO_DIRECTORY}")
         extra = _extra_logits(directory)
         if extra is None:
+            joint = CPU_FP32.model_file(directory, DECODER_JOINT_FILE)
             raise ModelError(
-                f"{onnx_file(directory, DECODER_JOINT_FILE)}: its logits per step are not fixed in the file, "
+                f"{joint}: its logits per step are not fixed in the file, "
                 f"so RNN-T and TDT cannot be told apart: {MANIFEST_FILE} needs model_type "
                 f"({RNNT} or {TDT})"
             )
         return (TDT if extra > 0 else RNNT), extra
-    if onnx_file(directory, CTC_FILE).is_file():
+    if CPU_FP32.model_file(directory, CTC_FILE).is_file():
         return CTC, None
     raise ModelError(f"{directory}: missing {MANIFEST_FILE} and the model's ONNX files; {NEMO_DIRECTORY}")
 
@@ -127,7 +121,7 @@ def _extra_logits(directory: Path) -> Optional[int]:
     from speech_event.recognizers.nemo.model import DECODER_OUTPUTS
     from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session
 
-    path = onnx_file(directory, DECODER_JOINT_FILE)
+    path = CPU_FP32.model_file(directory, DECODER_JOINT_FILE)
     session = open_session(path, ["CPUExecutionProvider"], NEMO_DIRECTORY)
     check_tensors(path, "outputs", session.get_outputs(), DECODER_OUTPUTS, "a NeMo export")
     size = last_dimension(session, "outputs")

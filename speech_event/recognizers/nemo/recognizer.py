@@ -29,7 +29,7 @@ from speech_event.recognizers.nemo.phrase_scores import rnnt_scores, tdt_scores
 from speech_event.recognizers.nemo.rnnt import rnnt_greedy
 from speech_event.recognizers.nemo.tdt import tdt_greedy
 from speech_event.recognizers.nemo.vocabulary import Vocabulary, load_vocabulary
-from speech_event.recognizers.onnx.directory import exported_directory
+from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_directory
 from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.hypothesis import Hypothesis
 from speech_event.recognizers.onnx.session import StoppableRuns
@@ -55,7 +55,7 @@ class NemoRecognizer:
     def __init__(
         self,
         model_directory: Union[str, Path],
-        cuda: bool = False,
+        runtime: Runtime = CPU_FP32,
         grammar: Optional[Grammar] = None,
         grammar_threshold: Optional[float] = None,
     ) -> None:
@@ -65,7 +65,9 @@ class NemoRecognizer:
         self._manifest = load_manifest(directory / MANIFEST_FILE)
         self._vocabulary = load_vocabulary(directory / VOCABULARY_FILE)
         self._model: Union[CtcModel, TransducerModel] = (
-            CtcModel(directory, cuda) if self._manifest.decoding == CTC else TransducerModel(directory, cuda)
+            CtcModel(directory, runtime)
+            if self._manifest.decoding == CTC
+            else TransducerModel(directory, runtime)
         )
         _check_logits(directory, self._model.logits_size, self._vocabulary, self._manifest)
         self._runs = StoppableRuns()

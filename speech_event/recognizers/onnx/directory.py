@@ -1,10 +1,11 @@
 """An exported model directory: a directory, not the framework's own file, whose config.json
 names the family it was exported from (every family writes one; for onnx-asr's directories, which
-do not, the family is derived)."""
+do not, the family is derived); and which of its ONNX files an engine runs (fp32 or int8)."""
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Union
+from typing import Optional, Union
 
 from speech_event.errors import ModelError
 
@@ -49,3 +50,42 @@ def family_of(directory: Path, unrecorded: str) -> str:
     from speech_event.recognizers.nemo.manifest import family_of_directory
 
     return family_of_directory(directory) or unrecorded
+
+
+# An int8 file's name after its fp32 file's stem: onnx-asr's (and our exporters') .int8, optimum's _int8.
+INT8_SUFFIXES = (".int8.onnx", "_int8.onnx")
+
+
+def int8_file(directory: Path, name: str) -> Optional[Path]:
+    """The int8 version of ``name`` (``encoder-model.onnx``) in ``directory``, if there is one."""
+    stem = name[: -len(".onnx")]
+    return next(
+        (path for path in (directory / (stem + suffix) for suffix in INT8_SUFFIXES) if path.is_file()), None
+    )
+
+
+@dataclass(frozen=True)
+class Runtime:
+    """How an engine runs its ONNX files: on CUDA or the CPU (the ``cuda`` key), and whether from
+    their int8 versions (the ``quantization`` key)."""
+
+    cuda: bool = False
+    int8: bool = False
+
+    def model_file(self, directory: Path, name: str) -> Path:
+        """``name`` in ``directory``, or its int8 version: with int8, that one (ModelError if there
+        is none); otherwise the fp32 file, or the int8 one when only that is there."""
+        quantized = int8_file(directory, name)
+        if self.int8:
+            if quantized is None:
+                raise ModelError(
+                    f"{directory}: quantization is int8 but there is no int8 version of {name} "
+                    f"({name[: -len('.onnx')]}.int8.onnx): export with --int8, pull with --int8, "
+                    "or set quantization none"
+                )
+            return quantized
+        fp32 = directory / name
+        return quantized if quantized is not None and not fp32.is_file() else fp32
+
+
+CPU_FP32 = Runtime()

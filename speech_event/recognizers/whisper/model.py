@@ -8,6 +8,7 @@ positions, head width]. One tensor a block: a decoding step slices nothing the s
 width] (the self-attention cache of the tokens before), every ``cross_k_i``, ``cross_v_i`` ->
 ``logits`` [1, n, vocabulary], ``new_self_k``, ``new_self_v`` [layers, 1, heads, past + n, head
 width]: a step costs one position.
+Each may have an int8 version (``encoder.int8.onnx``), which the ``quantization`` key picks.
 """
 
 import copy
@@ -18,6 +19,7 @@ import numpy as np
 import onnxruntime
 
 from speech_event.errors import ModelError
+from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime
 from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session, providers
 
 ENCODER_FILE = "encoder.onnx"
@@ -40,9 +42,12 @@ def cross_names(layers: int) -> List[str]:
 class WhisperModel:
     """encoder.onnx and decoder.onnx of an exported Whisper model, their tensors checked at load."""
 
-    def __init__(self, directory: Path, cuda: bool) -> None:
-        execution_providers = providers(cuda)
-        encoder_path, decoder_path = directory / ENCODER_FILE, directory / DECODER_FILE
+    def __init__(self, directory: Path, runtime: Runtime = CPU_FP32) -> None:
+        execution_providers = providers(runtime.cuda)
+        encoder_path, decoder_path = (
+            runtime.model_file(directory, ENCODER_FILE),
+            runtime.model_file(directory, DECODER_FILE),
+        )
         self._encoder = open_session(encoder_path, execution_providers, WHISPER_DIRECTORY)
         self.decoder = open_session(decoder_path, execution_providers, WHISPER_DIRECTORY)
         layers = sum(1 for arg in self._encoder.get_outputs() if arg.name.startswith("cross_k_"))

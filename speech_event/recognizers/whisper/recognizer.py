@@ -20,7 +20,7 @@ import onnxruntime
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
-from speech_event.recognizers.onnx.directory import exported_directory
+from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_directory
 from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
@@ -63,7 +63,7 @@ class WhisperRecognizer:
         self,
         model_directory: Union[str, Path],
         language: str,
-        cuda: bool = False,
+        runtime: Runtime = CPU_FP32,
         grammar: Optional[Grammar] = None,
         grammar_threshold: Optional[float] = None,
     ) -> None:
@@ -80,7 +80,7 @@ class WhisperRecognizer:
             )
         self._prompt = self._manifest.prompt(language)
         self._pieces = load_tokens(directory / TOKENS_FILE)
-        self._model = WhisperModel(directory, cuda)
+        self._model = WhisperModel(directory, runtime)
         if len(self._pieces) != self._manifest.vocabulary_size or self._model.vocabulary_size not in (
             None,
             self._manifest.vocabulary_size,

@@ -21,7 +21,6 @@ from speech_event.errors import ModelError
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.manifest import CTC, RNNT, TDT, load_manifest
-from speech_event.recognizers.nemo.onnx_asr_layout import onnx_file
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.onnx.directory import family_of
 
@@ -202,13 +201,6 @@ def test_a_directory_of_int8_files_only_loads_them(
     for model in theirs.glob("*.onnx"):
         model.rename(model.with_name(model.name.replace(".onnx", ".int8.onnx")))
     assert NemoRecognizer(theirs).hypothesis(audio) == NemoRecognizer(own).hypothesis(audio)
-
-
-def test_the_fp32_file_is_used_where_both_are_there(tmp_path: Path) -> None:
-    (tmp_path / "encoder-model.int8.onnx").write_bytes(b"")
-    assert onnx_file(tmp_path, "encoder-model.onnx") == tmp_path / "encoder-model.int8.onnx"
-    (tmp_path / "encoder-model.onnx").write_bytes(b"")
-    assert onnx_file(tmp_path, "encoder-model.onnx") == tmp_path / "encoder-model.onnx"
 
 
 def _error(directory: Path) -> str:

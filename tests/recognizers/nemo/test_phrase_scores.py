@@ -276,7 +276,7 @@ def _audio(seed: int) -> np.ndarray:
 
 
 def _encoded(directory: Path, seed: int) -> Tuple[TransducerModel, np.ndarray]:
-    model = TransducerModel(directory, cuda=False)
+    model = TransducerModel(directory)
     feature_settings = load_manifest(directory / MANIFEST_FILE).features
     return model, model.encode(features(padded_as_nemo_does(_audio(seed), 16000), feature_settings))
 
@@ -359,7 +359,7 @@ def test_the_greedy_tdt_tokens_are_at_least_as_likely_as_the_greedy_path(
 def test_the_greedy_ctc_tokens_are_at_least_as_likely_as_the_greedy_path(
     models: Dict[str, Path], seed: int
 ) -> None:
-    model = CtcModel(models["ctc"], cuda=False)
+    model = CtcModel(models["ctc"])
     feature_settings = load_manifest(models["ctc"] / MANIFEST_FILE).features
     logits = model.logits(features(padded_as_nemo_does(_audio(seed), 16000), feature_settings))
     found = ctc_greedy(logits, BLANK)  # its score is its path's: every frame's best token
@@ -434,7 +434,7 @@ def test_the_spoken_phrase_scores_higher_than_near_misses_on_the_tones_model() -
         load_manifest(directory / MANIFEST_FILE),
         load_vocabulary(directory / VOCABULARY_FILE),
     )
-    model = TransducerModel(directory, cuda=False)
+    model = TransducerModel(directory)
     audio = speak_tones("go left", 16000)
     frames = model.encode(features(padded_as_nemo_does(audio, 16000), manifest.features))
     # a letter changed, a letter or a word missing; not a letter more: off the tones the fixture's blank

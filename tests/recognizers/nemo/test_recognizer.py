@@ -21,6 +21,7 @@ from speech_event.recognizers.nemo.features import FeatureSettings, features, lo
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.nemo.rnnt import rnnt_greedy
 from speech_event.recognizers.nemo.vocabulary import Vocabulary, load_vocabulary
+from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.onnx.session import providers
 from tests.helpers.cancelling import failures_of_a_cancelled_transcription
 
@@ -166,7 +167,7 @@ def test_cuda_without_a_cuda_onnxruntime_warns_and_runs_on_the_cpu(
 ) -> None:
     assert providers(cuda=False) == ["CPUExecutionProvider"]
     with caplog.at_level(logging.WARNING, logger="speech_event"):
-        recognizer = NemoRecognizer(random_model, cuda=True)
+        recognizer = NemoRecognizer(random_model, Runtime(cuda=True))
     assert recognizer.transcribe(noise(16000, -20.0, np.random.default_rng(0))).text != ""
     assert caplog.messages == [
         "cuda is true but this onnxruntime has no CUDAExecutionProvider: running on the CPU"

@@ -49,7 +49,7 @@ def _tokens(text: str) -> List[int]:
 
 @pytest.fixture(scope="module")
 def tones_model() -> WhisperModel:
-    return WhisperModel(whisper_tones_model_directory(), cuda=False)
+    return WhisperModel(whisper_tones_model_directory())
 
 
 def _cross(model: WhisperModel, text: str) -> Dict[str, np.ndarray]:
@@ -127,7 +127,7 @@ def _history_decoder(seed: int) -> onnx.ModelProto:
 def test_forcing_is_exact_where_the_logits_depend_on_every_token_before(tmp_path: Path) -> None:
     directory = shutil.copytree(whisper_tones_model_directory(), tmp_path / "model")
     onnx.save(_history_decoder(seed=3), str(directory / DECODER_FILE))
-    model = WhisperModel(directory, cuda=False)
+    model = WhisperModel(directory)
     cross = _cross(model, "go left")
     rng = np.random.default_rng(4)
     sequences = [[int(token) for token in rng.integers(0, len(PIECES), size)] for size in (1, 2, 5, 9, 5)]

@@ -1,0 +1,142 @@
+"""fp32 against int8 (python -m bench.int8; section (e) of python -m bench.asr).
+
+For each model directory bench/family_models.py wrote (SPEECH_EVENT_FAMILY_MODELS=DIR: the
+conformer-transducer large, the Parakeet-TDT 0.6B shape, Whisper base and small, random weights),
+its int8 files are written once (speech_event/exporters/quantize.py, as export --int8 does). Then,
+on 2 cores and on 1 (taskset -c 0), each figure in a process of its own so that its peak memory is
+that engine's alone: our engine's real-time factor on 10 s of speech (the best of 3 runs after a
+warm-up) and its peak resident memory, and the same directory through onnx-asr (NeMo directories:
+onnx-asr reads ours as they are; it has no reader for export-whisper's layout), its RTF and ours
+divided by it. Last, how often int8 says what fp32 says on the command utterances.
+"""
+
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+
+from bench.asr import COMMANDS, word_errors
+from fixtures.tts import speak_tts
+from speech_event.config import SpeechEventConfig
+from speech_event.exporters.quantize import quantize_directory
+from speech_event.ports import Recognizer
+from speech_event.recognizers import RECOGNIZERS
+from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
+from speech_event.recognizers.onnx.directory import MANIFEST_FILE, WHISPER_FAMILY, family_of
+
+SECONDS = 10
+RUNS = 3
+
+
+def _speech() -> np.ndarray:
+    return np.concatenate([speak_tts(command, 16000) for command in COMMANDS])[: SECONDS * 16000]
+
+
+def _engine(directory: Path, quantization: str) -> Recognizer:
+    config = SpeechEventConfig(
+        model=family_of(directory, unrecorded=CONFORMER_TRANSDUCER),
+        en_model_path=str(directory),
+        quantization=quantization,
+    )
+    return RECOGNIZERS["auto"](config)
+
+
+def _onnx_asr(directory: Path, quantization: str) -> Optional[Callable[[np.ndarray], object]]:
+    """onnx-asr's model on ``directory``; None for a directory it has no reader for."""
+    if family_of(directory, unrecorded=CONFORMER_TRANSDUCER) == WHISPER_FAMILY:
+        return None
+    import onnx_asr
+
+    model_type = json.loads((directory / MANIFEST_FILE).read_text())["model_type"]
+    model = onnx_asr.load_model(
+        model_type, directory, quantization=None if quantization == "none" else "int8"
+    )
+    return lambda audio: model.recognize(audio, sample_rate=16000)
+
+
+def _measure(transcribe: Callable[[np.ndarray], object]) -> Dict[str, float]:
+    audio = _speech()
+    transcribe(audio)  # warm
+    best = float("inf")
+    for _ in range(RUNS):
+        started = time.perf_counter()
+        transcribe(audio)
+        best = min(best, time.perf_counter() - started)
+    return {"rtf": best / SECONDS, "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def one(runtime: str, directory: Path, quantization: str) -> None:
+    """In a process of its own: one engine's figures, as one JSON line."""
+    if runtime == "ours":
+        engine = _engine(directory, quantization)
+        figures: Optional[Dict[str, float]] = _measure(lambda audio: engine.transcribe(audio))
+    else:
+        model = _onnx_asr(directory, quantization)
+        figures = None if model is None else _measure(model)
+    print(json.dumps(figures))
+
+
+def _run(runtime: str, directory: Path, quantization: str, cores: int) -> Optional[Dict[str, float]]:
+    command = [sys.executable, "-m", "bench.int8", "--one", runtime, str(directory), quantization]
+    if cores == 1:
+        command = ["taskset", "-c", "0", *command]
+    output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    result: Optional[Dict[str, float]] = json.loads(output.strip().splitlines()[-1])
+    return result
+
+
+def _agreement(directory: Path) -> str:
+    """How often int8 says what fp32 says, each command an utterance of its own."""
+    fp32, int8 = _engine(directory, "none"), _engine(directory, "int8")
+    same = edits = words = 0
+    for command in COMMANDS:
+        audio = speak_tts(command, 16000)
+        said, quantized = fp32.transcribe(audio).text, int8.transcribe(audio).text
+        same += said == quantized
+        errors, count = word_errors(said, quantized)
+        edits, words = edits + errors, words + count
+    agreement = 1 - edits / words if words else 1.0
+    return f"int8 says what fp32 says on {same}/{len(COMMANDS)} utterances, word agreement {agreement:.3f}"
+
+
+def _line(name: str, quantization: str, cores: int, directory: Path) -> str:
+    ours = _run("ours", directory, quantization, cores)
+    theirs = _run("onnx-asr", directory, quantization, cores)
+    assert ours is not None
+    figures = f"RTF {ours['rtf']:.3f}, peak {ours['peak_mib']:.0f} MiB"
+    if theirs is None:
+        compared = "onnx-asr: no reader for this layout"
+    else:
+        compared = (
+            f"onnx-asr RTF {theirs['rtf']:.3f}, peak {theirs['peak_mib']:.0f} MiB; "
+            f"ours / onnx-asr {ours['rtf'] / theirs['rtf']:.2f}"
+        )
+    return f"(e) {name:18s} {quantization:4s} {cores} core{'s' if cores > 1 else ' '}: {figures}; {compared}"
+
+
+def figures() -> None:
+    where = os.environ.get("SPEECH_EVENT_FAMILY_MODELS")
+    if not where:
+        print("(e) set SPEECH_EVENT_FAMILY_MODELS to the directory bench/family_models.py wrote")
+        return
+    directories: List[Path] = sorted(path for path in Path(where).iterdir() if path.is_dir())
+    for directory in directories:
+        if not list(directory.glob("*.int8.onnx")):
+            quantize_directory(directory)
+        for cores in (2, 1):
+            for quantization in ("none", "int8"):
+                print(_line(directory.name, quantization, cores, directory), flush=True)
+        print(f"(e) {directory.name:18s} {_agreement(directory)}", flush=True)
+
+
+if __name__ == "__main__":
+    if sys.argv[1:2] == ["--one"]:
+        one(sys.argv[2], Path(sys.argv[3]), sys.argv[4])
+        sys.exit(0)
+    figures()

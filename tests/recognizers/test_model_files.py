@@ -1,0 +1,51 @@
+"""Which of a model directory's ONNX files an engine runs (onnx/directory.py's Runtime): the fp32
+file or its int8 version, by the quantization key and by what is there."""
+
+from pathlib import Path
+from typing import List
+
+import pytest
+
+from speech_event.errors import ModelError
+from speech_event.recognizers.onnx.directory import Runtime
+
+NONE, INT8 = Runtime(), Runtime(int8=True)
+
+
+@pytest.mark.parametrize(
+    ("files", "runtime", "chosen"),
+    [
+        pytest.param(
+            ["encoder-model.onnx", "encoder-model.int8.onnx"],
+            NONE,
+            "encoder-model.onnx",
+            id="fp32_where_both",
+        ),
+        pytest.param(["encoder-model.int8.onnx"], NONE, "encoder-model.int8.onnx", id="int8_where_only_it"),
+        pytest.param(["encoder-model.onnx"], NONE, "encoder-model.onnx", id="fp32_where_only_it"),
+        pytest.param(
+            [], NONE, "encoder-model.onnx", id="the_fp32_name_where_none_for_the_missing_file_error"
+        ),
+        pytest.param(
+            ["encoder-model.onnx", "encoder-model.int8.onnx"],
+            INT8,
+            "encoder-model.int8.onnx",
+            id="int8_asked",
+        ),
+        pytest.param(["encoder-model_int8.onnx"], INT8, "encoder-model_int8.onnx", id="optimums_int8_name"),
+    ],
+)
+def test_the_file_run(tmp_path: Path, files: List[str], runtime: Runtime, chosen: str) -> None:
+    for name in files:
+        (tmp_path / name).write_bytes(b"")
+    assert runtime.model_file(tmp_path, "encoder-model.onnx") == tmp_path / chosen
+
+
+def test_int8_asked_where_there_is_none_says_how_to_get_it(tmp_path: Path) -> None:
+    (tmp_path / "decoder.onnx").write_bytes(b"")
+    with pytest.raises(ModelError) as error:
+        INT8.model_file(tmp_path, "decoder.onnx")
+    assert str(error.value) == (
+        f"{tmp_path}: quantization is int8 but there is no int8 version of decoder.onnx (decoder.int8.onnx): "
+        "export with --int8, pull with --int8, or set quantization none"
+    )
