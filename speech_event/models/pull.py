@@ -20,7 +20,7 @@ Needs huggingface_hub (the ``pull`` extra) and honours its settings: ``HF_ENDPOI
    (every file, the family, for NeMo the manifest the engine reads), and the sibling is renamed to
    DIR: DIR never exists half-written, and an existing DIR is never touched.
 5. stdout gets the configuration lines that use it, ``model FAMILY`` and ``en_model_path DIR``
-   (``rw_model_path`` with ``--language kinyarwanda``), so ``>> config.ini`` takes them.
+   (``rw_model_path`` with ``--language kinyarwanda``), so ``> models.ini`` is a configuration file.
 
 Exit status 0; 1 when the download failed (run it again: it resumes); 2 for what a rerun would not change.
 """
