@@ -10,35 +10,24 @@ from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.directory import Runtime
 
 NONE, INT8 = Runtime(), Runtime(int8=True)
+FP32, QUANTIZED = "encoder-model.onnx", "encoder-model.int8.onnx"
 
 
 @pytest.mark.parametrize(
     ("files", "runtime", "chosen"),
     [
-        pytest.param(
-            ["encoder-model.onnx", "encoder-model.int8.onnx"],
-            NONE,
-            "encoder-model.onnx",
-            id="fp32_where_both",
-        ),
-        pytest.param(["encoder-model.int8.onnx"], NONE, "encoder-model.int8.onnx", id="int8_where_only_it"),
-        pytest.param(["encoder-model.onnx"], NONE, "encoder-model.onnx", id="fp32_where_only_it"),
-        pytest.param(
-            [], NONE, "encoder-model.onnx", id="the_fp32_name_where_none_for_the_missing_file_error"
-        ),
-        pytest.param(
-            ["encoder-model.onnx", "encoder-model.int8.onnx"],
-            INT8,
-            "encoder-model.int8.onnx",
-            id="int8_asked",
-        ),
+        pytest.param([FP32, QUANTIZED], NONE, FP32, id="fp32_where_both"),
+        pytest.param([QUANTIZED], NONE, QUANTIZED, id="int8_where_only_it"),
+        pytest.param([FP32], NONE, FP32, id="fp32_where_only_it"),
+        pytest.param([], NONE, FP32, id="the_fp32_name_where_none_for_the_missing_file_error"),
+        pytest.param([FP32, QUANTIZED], INT8, QUANTIZED, id="int8_asked"),
         pytest.param(["encoder-model_int8.onnx"], INT8, "encoder-model_int8.onnx", id="optimums_int8_name"),
     ],
 )
 def test_the_file_run(tmp_path: Path, files: List[str], runtime: Runtime, chosen: str) -> None:
     for name in files:
         (tmp_path / name).write_bytes(b"")
-    assert runtime.model_file(tmp_path, "encoder-model.onnx") == tmp_path / chosen
+    assert runtime.model_file(tmp_path, FP32) == tmp_path / chosen
 
 
 def test_int8_asked_where_there_is_none_says_how_to_get_it(tmp_path: Path) -> None:
