@@ -15,7 +15,6 @@ openai-whisper, once): SPEECH_EVENT_FAMILY_MODELS=DIR names where it wrote them;
 
 import logging
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -91,6 +90,15 @@ def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
             current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != other)))
         previous = current
     return previous[-1], len(ref)
+
+
+def peak_mib() -> float:
+    """This process's peak resident memory: VmHWM, which starts afresh at exec (ru_maxrss does not:
+    it would carry the parent's peak, the quantizer's among it)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    raise RuntimeError("no VmHWM in /proc/self/status")
 
 
 def score(recognizer: Recognizer, samples: Sequence[Tuple[str, np.ndarray]]) -> Tuple[float, float]:
@@ -215,7 +223,7 @@ def one_family_model(directory: Path) -> None:
         figures.append(f"RTF {(time.perf_counter() - started) / seconds:.3f} on {seconds} s")
     if isinstance(engine, WhisperRecognizer):
         figures.append(_whisper_costs(engine, speech[: 5 * 16000]))
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peak = peak_mib()
     _family_engine(directory, cuda=True).transcribe(speech[:16000])
     print(
         f"(d) {directory.name:20s} loaded in {loaded:.1f} s; {', '.join(figures)}; peak memory {peak:.0f} MiB"

@@ -12,7 +12,6 @@ divided by it. Last, how often int8 says what fp32 says on the command utterance
 
 import json
 import os
-import resource
 import subprocess
 import sys
 import time
@@ -21,7 +20,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from bench.asr import COMMANDS, word_errors
+from bench.asr import COMMANDS, peak_mib, word_errors
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.exporters.quantize import quantize_directory
@@ -68,7 +67,7 @@ def _measure(transcribe: Callable[[np.ndarray], object]) -> Dict[str, float]:
         started = time.perf_counter()
         transcribe(audio)
         best = min(best, time.perf_counter() - started)
-    return {"rtf": best / SECONDS, "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    return {"rtf": best / SECONDS, "peak_mib": peak_mib()}
 
 
 def one(runtime: str, directory: Path, quantization: str) -> None:
