@@ -20,9 +20,12 @@ import pytest
 
 from fixtures.audio import noise, speak_tones
 from fixtures.transducer_model import build_random_transducer
+from fixtures.whisper_tones_optimum import optimum_json_files, whisper_tones_optimum_directory
 from speech_event.models.pull import KNOWN, main
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
+from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
 TDT_NAME = "nemo-parakeet-tdt-0.6b-v2"
 TDT_REPOSITORY = KNOWN[TDT_NAME]
@@ -276,17 +279,17 @@ def test_int8_takes_the_int8_files_and_kinyarwanda_its_key(
     assert NemoRecognizer(directory).transcribe(_audio()).text != ""
 
 
-def test_a_whisper_repository_of_optimums_layout_is_pulled_flat(hub: FakeHub, tmp_path: Path) -> None:
+def test_a_whisper_repository_of_optimums_layout_is_pulled_flat_and_runs(
+    hub: FakeHub, tmp_path: Path
+) -> None:
+    model = whisper_tones_optimum_directory()
     files = {
-        "onnx/encoder_model.onnx": b"encoder",
-        "onnx/decoder_model_merged.onnx": b"decoder merged",
+        "onnx/encoder_model_int8.onnx": (model / "encoder_model.onnx").read_bytes(),
+        "onnx/decoder_model_merged_int8.onnx": (model / "decoder_model_merged.onnx").read_bytes(),
+        "onnx/encoder_model.onnx": b"encoder fp32: not taken with --int8",
+        "onnx/decoder_model_merged.onnx": b"decoder merged fp32",
         "onnx/decoder_model.onnx": b"decoder without the cache: not needed",
-        "onnx/encoder_model_int8.onnx": b"encoder int8",
-        "onnx/decoder_model_merged_int8.onnx": b"decoder merged int8",
-        "config.json": json.dumps({"model_type": "whisper", "num_mel_bins": 80}).encode(),
-        "generation_config.json": b"{}",
-        "vocab.json": b"{}",
-        "added_tokens.json": b"{}",
+        **{name: (model / name).read_bytes() for name in optimum_json_files()},
         "merges.txt": b"#version: 0.2\n",
         "tokenizer.json": b"{}",
         "README.md": b"# whisper\n",
@@ -306,6 +309,29 @@ def test_a_whisper_repository_of_optimums_layout_is_pulled_flat(hub: FakeHub, tm
         "tokenizer.json",
         "vocab.json",
     ]
+    engine = WhisperRecognizer(directory, "english", Runtime(int8=True))
+    assert engine.transcribe(speak_tones("go left", 16000)).text == "go left"
+
+
+def test_a_whisper_repository_without_what_the_engine_reads_is_refused_and_left_out(
+    hub: FakeHub, tmp_path: Path
+) -> None:
+    model = whisper_tones_optimum_directory()
+    files = {name: (model / name).read_bytes() for name in (*optimum_json_files(), "encoder_model.onnx")}
+    files["decoder_model_merged.onnx"] = (model / "decoder_model_merged.onnx").read_bytes()
+    files["generation_config.json"] = b"{}"
+    files["config.json"] = json.dumps(
+        {"model_type": "whisper", "vocab_size": 63, "num_mel_bins": 80}
+    ).encode()
+    hub.repositories["someone/whisper"] = files
+    directory = tmp_path / "whisper"
+    done = pull(hub, tmp_path, "someone/whisper", str(directory))
+    assert done.returncode == 2
+    assert done.stderr.endswith(
+        "error: someone/whisper: the files downloaded are not a model the engine loads: "
+        f"{tmp_path}/.whisper.partial/config.json: no 'max_target_positions'; transformers' Whisper config has it\n"
+    )
+    assert not directory.exists() and not (tmp_path / ".whisper.partial").exists()
 
 
 def test_an_unknown_name_lists_the_known_ones(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -9,6 +9,7 @@ import pytest
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_ctc_model_directory, tones_model_directory, tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
+from fixtures.whisper_tones_optimum import whisper_tones_optimum_directory
 from speech_event.errors import GrammarError
 from speech_event.grammar import Grammar, jsgf_grammar, requested_grammar
 from speech_event.ports import Grammars, Transcript
@@ -31,6 +32,9 @@ ENGINES: Dict[str, Build] = {
     ),
     "whisper": lambda grammar, threshold: WhisperRecognizer(
         whisper_tones_model_directory(), "english", grammar=grammar, grammar_threshold=threshold
+    ),
+    "whisper_optimum": lambda grammar, threshold: WhisperRecognizer(
+        whisper_tones_optimum_directory(), "english", grammar=grammar, grammar_threshold=threshold
     ),
 }
 # said -> the phrase published ("" none), and the phrase named as rejected

@@ -6,16 +6,15 @@ The prompt's decoder pass is shared: it runs once, then each phrase's tokens run
 call from a fork of the prompt's key/value cache.
 """
 
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Sequence
 
 import numpy as np
-import onnxruntime
 
 from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.hypothesis import log_softmax
 from speech_event.recognizers.whisper.greedy import whisper_logits
 from speech_event.recognizers.whisper.manifest import WhisperManifest
-from speech_event.recognizers.whisper.model import DecoderSession, WhisperModel
+from speech_event.recognizers.whisper.model import Decoding
 
 
 def phrase_variants(phrase: str) -> List[str]:
@@ -73,18 +72,15 @@ def forced_log_likelihood(logits: np.ndarray, tokens: Sequence[int], manifest: W
 
 
 def score_phrases(
-    model: WhisperModel,
-    cross: Dict[str, np.ndarray],
+    session: Decoding,
     prompt: Sequence[int],
     sequences: Sequence[Sequence[int]],
     manifest: WhisperManifest,
-    run: Optional[onnxruntime.RunOptions] = None,
 ) -> List[float]:
-    """Each token sequence's ``forced_log_likelihood`` after ``prompt`` given the audio's ``cross``
-    (``WhisperModel.encode``): one decoder call for the prompt, then one per non-empty sequence, all
-    its tokens at once from a fork of the prompt's cache. An empty sequence is eot at the first
+    """Each token sequence's ``forced_log_likelihood`` after ``prompt`` in the audio's decoding
+    ``session``, given no token yet: one decoder pass for the prompt, then one per non-empty sequence,
+    all its tokens from a fork of the prompt's cache. An empty sequence is eot at the first
     position, which Whisper's rules rule out: -inf."""
-    session = DecoderSession(model, cross, run)
     after_prompt = session(prompt)[-1:]
     scores: List[float] = []
     for tokens in sequences:

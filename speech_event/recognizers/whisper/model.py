@@ -9,11 +9,14 @@ width] (the self-attention cache of the tokens before), every ``cross_k_i``, ``c
 ``logits`` [1, n, vocabulary], ``new_self_k``, ``new_self_v`` [layers, 1, heads, past + n, head
 width]: a step costs one position.
 Each may have an int8 version (``encoder.int8.onnx``), which the ``quantization`` key picks.
+
+``WhisperOnnx`` and ``Decoding`` are what decoding needs of a model, whatever its layout: this one's,
+or Hugging Face optimum's (optimum_model.py).
 """
 
 import copy
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Protocol, Sequence
 
 import numpy as np
 import onnxruntime
@@ -32,6 +35,30 @@ WHISPER_DIRECTORY = (
     "(speech-event export-whisper CHECKPOINT DIR writes one)"
 )
 EXPORTER = "speech-event export-whisper"
+
+
+class Decoding(Protocol):
+    """One piece of audio's decoder: new tokens -> their logits [len(tokens), vocabulary]; it keeps
+    the tokens before (its key/value cache), so each step costs what its new tokens cost."""
+
+    def __call__(self, tokens: Sequence[int]) -> np.ndarray: ...
+
+    def fork(self) -> "Decoding":
+        """A decoding that goes on from the tokens given so far, apart from this one."""
+        ...
+
+
+class WhisperOnnx(Protocol):
+    """A Whisper model's ONNX files, loaded: the audio's encoding and its decoding."""
+
+    @property
+    def vocabulary_size(self) -> Optional[int]:
+        """The logits a step gives, when the file fixes it."""
+        ...
+
+    def decoding(self, mel: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> Decoding:
+        """The decoding of the audio whose log-mel window [mel bands, 3000] is ``mel``, no token given yet."""
+        ...
 
 
 def cross_names(layers: int) -> List[str]:
@@ -73,6 +100,9 @@ class WhisperModel:
         """Each block's cross-attention keys and values, by the decoder's input names."""
         outputs = self._encoder.run(self._cross_names, {"mel": mel[None].astype(np.float32)}, run)
         return dict(zip(self._cross_names, (np.asarray(output) for output in outputs)))
+
+    def decoding(self, mel: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> "DecoderSession":
+        return DecoderSession(self, self.encode(mel, run), run)
 
 
 class DecoderSession:

@@ -26,14 +26,8 @@ from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
 from speech_event.recognizers.whisper.forced import phrase_tokens, phrase_variants, score_phrases
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
-from speech_event.recognizers.whisper.manifest import (
-    MANIFEST_FILE,
-    TOKENS_FILE,
-    load_tokens,
-    load_whisper_manifest,
-    text_of,
-)
-from speech_event.recognizers.whisper.model import DecoderSession, WhisperModel
+from speech_event.recognizers.whisper.layouts import load_whisper_directory
+from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
 
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10
@@ -70,7 +64,7 @@ class WhisperRecognizer:
         """``grammar_threshold``: see onnx/grammar_choice.py (the ``grammar_threshold`` key); None:
         NEURAL_GRAMMAR_THRESHOLD."""
         directory = exported_directory(model_directory, ".pt", "export-whisper")
-        self._manifest = load_whisper_manifest(directory / MANIFEST_FILE)
+        self._manifest, self._pieces, self._model = load_whisper_directory(directory, runtime)
         if language not in self._manifest.languages:
             named = ", ".join(sorted(self._manifest.languages)) or "none"
             raise ModelError(
@@ -79,14 +73,12 @@ class WhisperRecognizer:
                 f"with one, naming it: speech-event export-whisper CHECKPOINT DIR --language {language}=CODE"
             )
         self._prompt = self._manifest.prompt(language)
-        self._pieces = load_tokens(directory / TOKENS_FILE)
-        self._model = WhisperModel(directory, runtime)
         if len(self._pieces) != self._manifest.vocabulary_size or self._model.vocabulary_size not in (
             None,
             self._manifest.vocabulary_size,
         ):
             raise ModelError(
-                f"{directory}: {TOKENS_FILE} has {len(self._pieces)} tokens, {MANIFEST_FILE} says n_vocab "
+                f"{directory}: the tokenizer's files hold {len(self._pieces)} tokens, {MANIFEST_FILE} says "
                 f"{self._manifest.vocabulary_size}, the decoder gives {self._model.vocabulary_size} logits: "
                 "the files are not of one export"
             )
@@ -129,8 +121,8 @@ class WhisperRecognizer:
 
     def decode(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> WhisperResult:
         """Whisper's greedy decoding of one piece of at most 30 s."""
-        cross = self._model.encode(whisper_log_mel(audio, self._manifest.mel_bands), run)
-        return whisper_greedy(DecoderSession(self._model, cross, run), self._prompt, self._manifest)
+        decoding = self._model.decoding(whisper_log_mel(audio, self._manifest.mel_bands), run)
+        return whisper_greedy(decoding, self._prompt, self._manifest)
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = self._runs.start()
@@ -150,14 +142,12 @@ class WhisperRecognizer:
 
     def _within(self, forms: PhraseForms, audio: np.ndarray, run: onnxruntime.RunOptions) -> Transcript:
         """The phrase of the grammar said in ``audio`` (at most 30 s), or none."""
-        cross = self._model.encode(whisper_log_mel(audio, self._manifest.mel_bands), run)
-        free = whisper_greedy(DecoderSession(self._model, cross, run), self._prompt, self._manifest)
+        decoding = self._model.decoding(whisper_log_mel(audio, self._manifest.mel_bands), run)
+        free = whisper_greedy(decoding.fork(), self._prompt, self._manifest)
         owners: List[Tuple[str, List[int]]] = [
             (phrase, tokens) for phrase, each in forms.items() for tokens in each
         ]
-        scores = score_phrases(
-            self._model, cross, self._prompt, [tokens for _, tokens in owners], self._manifest, run
-        )
+        scores = score_phrases(decoding, self._prompt, [tokens for _, tokens in owners], self._manifest)
         best: Dict[str, float] = {}
         for (phrase, _), score in zip(owners, scores):
             best[phrase] = max(score, best.get(phrase, -np.inf))

@@ -77,7 +77,7 @@ def test_the_greedy_texts_forced_score_is_its_greedy_score(tones_model: WhisperM
     result = whisper_greedy(DecoderSession(tones_model, cross), PROMPT, MANIFEST)
     assert text_of(result.tokens, TOKENS, TIMESTAMP_BEGIN) == f" {spoken}"  # ended on eot
     assert np.isfinite(result.score) and result.score < 0.0
-    assert score_phrases(tones_model, cross, PROMPT, [result.tokens], MANIFEST) == [
+    assert score_phrases(DecoderSession(tones_model, cross), PROMPT, [result.tokens], MANIFEST) == [
         pytest.approx(result.score, abs=1e-5)
     ]
 
@@ -86,7 +86,7 @@ def test_forcing_many_phrases_after_one_prompt_is_the_brute_force_score(tones_mo
     cross = _cross(tones_model, "go left")
     sequences = [_tokens(text) for text in (" go left", " go lefts", " go lift", " go", " stop", " a")]
     sequences.append([TIMESTAMP_BEGIN, *_tokens(" go")])  # a timestamp is no text, yet a token
-    scores = score_phrases(tones_model, cross, PROMPT, sequences, MANIFEST)
+    scores = score_phrases(DecoderSession(tones_model, cross), PROMPT, sequences, MANIFEST)
     assert scores == [
         pytest.approx(_brute_force(tones_model, cross, tokens), abs=1e-5) for tokens in sequences
     ]
@@ -132,7 +132,7 @@ def test_forcing_is_exact_where_the_logits_depend_on_every_token_before(tmp_path
     rng = np.random.default_rng(4)
     sequences = [[int(token) for token in rng.integers(0, len(PIECES), size)] for size in (1, 2, 5, 9, 5)]
     sequences.append(sequences[2][:3])  # a prefix of an earlier sequence, scored after it
-    scores = score_phrases(model, cross, PROMPT, sequences, MANIFEST)
+    scores = score_phrases(DecoderSession(model, cross), PROMPT, sequences, MANIFEST)
     assert len(set(scores)) == len(scores) and all(np.isfinite(scores))
     assert scores == [pytest.approx(_brute_force(model, cross, tokens), abs=1e-5) for tokens in sequences]
 
@@ -140,7 +140,10 @@ def test_forcing_is_exact_where_the_logits_depend_on_every_token_before(tmp_path
 def test_the_spoken_phrase_outscores_its_near_misses(tones_model: WhisperModel) -> None:
     texts = [" go left", " go lefts", " go lift", " go"]
     spoken, *misses = score_phrases(
-        tones_model, _cross(tones_model, "go left"), PROMPT, [_tokens(t) for t in texts], MANIFEST
+        DecoderSession(tones_model, _cross(tones_model, "go left")),
+        PROMPT,
+        [_tokens(t) for t in texts],
+        MANIFEST,
     )
     assert all(spoken > miss for miss in misses), (spoken, misses)
 
@@ -148,7 +151,9 @@ def test_the_spoken_phrase_outscores_its_near_misses(tones_model: WhisperModel) 
 def test_a_token_whispers_rules_rule_out_scores_minus_infinity(tones_model: WhisperModel) -> None:
     cross = _cross(tones_model, "go left")
     go, left = _tokens(" go"), _tokens(" left")
-    scores = score_phrases(tones_model, cross, PROMPT, [[*go, NO_SPEECH, *left], [SOT, *go], []], MANIFEST)
+    scores = score_phrases(
+        DecoderSession(tones_model, cross), PROMPT, [[*go, NO_SPEECH, *left], [SOT, *go], []], MANIFEST
+    )
     assert scores == [-np.inf, -np.inf, -np.inf]  # suppressed anywhere; eot at the first position
 
 

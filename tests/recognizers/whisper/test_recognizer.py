@@ -190,7 +190,7 @@ def test_a_missing_decoder_and_mismatched_tokens_are_named(tmp_path: Path) -> No
     with pytest.raises(ModelError) as error:
         WhisperRecognizer(directory, "english")
     assert str(error.value) == (
-        f"{directory}: tokens.txt has 10 tokens, config.json says n_vocab {TONES_MANIFEST.vocabulary_size}, "
+        f"{directory}: the tokenizer's files hold 10 tokens, config.json says {TONES_MANIFEST.vocabulary_size}, "
         f"the decoder gives {TONES_MANIFEST.vocabulary_size} logits: the files are not of one export"
     )
     (directory / "decoder.onnx").unlink()
