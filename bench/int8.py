@@ -6,7 +6,8 @@ its int8 files are written once (speech_event/exporters/quantize.py, as export -
 on 2 cores and on 1 (taskset -c 0), each figure in a process of its own so that its peak memory is
 that engine's alone: our engine's real-time factor on 10 s of speech (the best of 3 runs after a
 warm-up) and its peak resident memory, and the same directory through onnx-asr (NeMo directories:
-onnx-asr reads ours as they are; it has no reader for export-whisper's layout), its RTF and ours
+onnx-asr reads ours as they are; Whisper in optimum's layout, which bench/whisper_optimum_parity.py
+writes, as its "whisper" model; it has no reader for export-whisper's layout), its RTF and ours
 divided by it. Last, how often int8 says what fp32 says on the command utterances.
 """
 
@@ -27,7 +28,8 @@ from speech_event.exporters.quantize import quantize_directory
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
-from speech_event.recognizers.onnx.directory import MANIFEST_FILE, WHISPER_FAMILY, family_of
+from speech_event.recognizers.onnx.directory import MANIFEST_FILE, WHISPER_FAMILY, family_of, int8_file
+from speech_event.recognizers.whisper.optimum_layout import is_optimum_directory
 
 SECONDS = 10
 RUNS = 3
@@ -48,15 +50,18 @@ def _engine(directory: Path, quantization: str) -> Recognizer:
 
 def _onnx_asr(directory: Path, quantization: str) -> Optional[Callable[[np.ndarray], object]]:
     """onnx-asr's model on ``directory``; None for a directory it has no reader for."""
-    if family_of(directory, unrecorded=CONFORMER_TRANSDUCER) == WHISPER_FAMILY:
-        return None
     import onnx_asr
 
-    model_type = json.loads((directory / MANIFEST_FILE).read_text())["model_type"]
+    if family_of(directory, unrecorded=CONFORMER_TRANSDUCER) == WHISPER_FAMILY:
+        if not is_optimum_directory(directory):
+            return None
+        model_type, language = "whisper", {"language": "en"}
+    else:
+        model_type, language = json.loads((directory / MANIFEST_FILE).read_text())["model_type"], {}
     model = onnx_asr.load_model(
         model_type, directory, quantization=None if quantization == "none" else "int8"
     )
-    return lambda audio: model.recognize(audio, sample_rate=16000)
+    return lambda audio: model.recognize(audio, sample_rate=16000, **language)
 
 
 def _measure(transcribe: Callable[[np.ndarray], object]) -> Dict[str, float]:
@@ -126,7 +131,7 @@ def figures() -> None:
         return
     directories: List[Path] = sorted(path for path in Path(where).iterdir() if path.is_dir())
     for directory in directories:
-        if not list(directory.glob("*.int8.onnx")):
+        if not any(int8_file(directory, path.name) for path in directory.glob("*.onnx")):
             quantize_directory(directory)
         for cores in (2, 1):
             for quantization in ("none", "int8"):

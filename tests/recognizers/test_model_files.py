@@ -1,13 +1,15 @@
 """Which of a model directory's ONNX files an engine runs (onnx/directory.py's Runtime): the fp32
-file or its int8 version, by the quantization key and by what is there."""
+file or its int8 version, by the quantization key and by what is there; and how it is opened."""
 
 from pathlib import Path
 from typing import List
 
 import pytest
 
+from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.onnx.session import open_session
 
 NONE, INT8 = Runtime(), Runtime(int8=True)
 FP32, QUANTIZED = "encoder-model.onnx", "encoder-model.int8.onnx"
@@ -38,3 +40,10 @@ def test_int8_asked_where_there_is_none_says_how_to_get_it(tmp_path: Path) -> No
         f"{tmp_path}: quantization is int8 but there is no int8 version of decoder.onnx (decoder.int8.onnx): "
         "export with --int8, pull with --int8, or set quantization none"
     )
+
+
+def test_sessions_run_without_onnxruntimes_memory_arena() -> None:
+    # the arena would keep each run's peak buffers for the process's life (bench/int8.py: the large
+    # conformer's int8 peak 561 MiB with it, 479 without, as fast)
+    session = open_session(whisper_tones_model_directory() / "encoder.onnx", ["CPUExecutionProvider"], "")
+    assert session.get_session_options().enable_cpu_mem_arena is False
