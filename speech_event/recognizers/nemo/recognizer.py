@@ -29,6 +29,7 @@ from speech_event.recognizers.nemo.phrase_scores import rnnt_scores, tdt_scores
 from speech_event.recognizers.nemo.rnnt import rnnt_greedy
 from speech_event.recognizers.nemo.tdt import tdt_greedy
 from speech_event.recognizers.nemo.vocabulary import Vocabulary, load_vocabulary
+from speech_event.recognizers.onnx.compiled_grammars import CompiledGrammars
 from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_directory
 from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.hypothesis import Hypothesis
@@ -72,9 +73,8 @@ class NemoRecognizer:
         _check_logits(directory, self._model.logits_size, self._vocabulary, self._manifest)
         self._runs = StoppableRuns()
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
-        self._compiled: Dict[Grammar, Dict[str, List[int]]] = {}
-        self._grammar: Optional[Grammar] = None
-        self.use_grammar(grammar)
+        self._grammars = CompiledGrammars(self._phrase_tokens)
+        self._grammars.use(grammar)
 
     @property
     def sample_rate(self) -> int:
@@ -82,24 +82,18 @@ class NemoRecognizer:
 
     def check_grammar(self, grammar: Grammar) -> None:
         """Every phrase must be spelt by the model's vocabulary."""
-        self._phrase_tokens(grammar)
+        self._grammars.compiled(grammar)
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
-        if grammar is not None:
-            self._phrase_tokens(grammar)
-        self._grammar = grammar
+        self._grammars.use(grammar)
 
     def _phrase_tokens(self, grammar: Grammar) -> Dict[str, List[int]]:
-        """Each phrase's tokens, worked out once per grammar."""
-        compiled = self._compiled.get(grammar)
-        if compiled is None:
-            phrases = grammar.sentences(ENGINE)
-            try:
-                compiled = {phrase: self._vocabulary.encode(phrase) for phrase in phrases}
-            except ModelError as problem:
-                raise GrammarError(f"{grammar.source}: {problem}") from None
-            self._compiled[grammar] = compiled
-        return compiled
+        """Each phrase's tokens."""
+        phrases = grammar.sentences(ENGINE)
+        try:
+            return {phrase: self._vocabulary.encode(phrase) for phrase in phrases}
+        except ModelError as problem:
+            raise GrammarError(f"{grammar.source}: {problem}") from None
 
     def _encoded(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions]) -> np.ndarray:
         """The encoder's frames [T', D] (a CTC model's log-probabilities [T', V + 1]) for 16 kHz ``audio``."""
@@ -126,9 +120,10 @@ class NemoRecognizer:
         run = self._runs.start()
         encoded = self._encoded(audio, run)
         found = self._greedy(encoded, run)
-        if self._grammar is None:
+        grammar = self._grammars.in_force
+        if grammar is None:
             return Transcript(self._vocabulary.text(found.tokens), found.confidence)
-        return self._within(self._phrase_tokens(self._grammar), encoded, found, run)
+        return self._within(self._grammars.compiled(grammar), encoded, found, run)
 
     def _within(
         self,

@@ -20,6 +20,7 @@ import onnxruntime
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
+from speech_event.recognizers.onnx.compiled_grammars import CompiledGrammars
 from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_directory
 from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.session import StoppableRuns
@@ -84,9 +85,8 @@ class WhisperRecognizer:
             )
         self._runs = StoppableRuns()
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
-        self._compiled: Dict[Grammar, PhraseForms] = {}
-        self._grammar: Optional[Grammar] = None
-        self.use_grammar(grammar)
+        self._grammars = CompiledGrammars(self._forms)
+        self._grammars.use(grammar)
 
     @property
     def sample_rate(self) -> int:
@@ -94,17 +94,13 @@ class WhisperRecognizer:
 
     def check_grammar(self, grammar: Grammar) -> None:
         """Every phrase must be spelt by the model's tokens in at least one form."""
-        self._forms(grammar)
+        self._grammars.compiled(grammar)
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
-        if grammar is not None:
-            self._forms(grammar)
-        self._grammar = grammar
+        self._grammars.use(grammar)
 
     def _forms(self, grammar: Grammar) -> PhraseForms:
-        compiled = self._compiled.get(grammar)
-        if compiled is not None:
-            return compiled
+        """Each phrase's token sequences, one for each form the model can spell."""
         compiled = {}
         for phrase in grammar.sentences(ENGINE):
             forms = []
@@ -116,7 +112,6 @@ class WhisperRecognizer:
             if not forms:
                 raise GrammarError(f"{grammar.source}: {ENGINE}'s tokens cannot spell {phrase!r}")
             compiled[phrase] = forms
-        self._compiled[grammar] = compiled
         return compiled
 
     def decode(self, audio: np.ndarray, run: Optional[onnxruntime.RunOptions] = None) -> WhisperResult:
@@ -126,10 +121,12 @@ class WhisperRecognizer:
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = self._runs.start()
-        grammar = self._grammar
+        grammar = self._grammars.in_force
         if grammar is not None:
             return self._within(
-                self._forms(grammar), pieces_at_quiet_points(np.asarray(audio, np.float32))[0], run
+                self._grammars.compiled(grammar),
+                pieces_at_quiet_points(np.asarray(audio, np.float32))[0],
+                run,
             )
         results = [self.decode(piece, run) for piece in pieces_at_quiet_points(np.asarray(audio, np.float32))]
         texts = [
