@@ -74,6 +74,14 @@ def _json(path: Path, required: bool) -> Dict[str, Any]:
     return document
 
 
+def _token_ids(path: Path) -> Dict[str, int]:
+    """vocab.json or added_tokens.json: each token's text and its id."""
+    try:
+        return {str(text): int(token) for text, token in _json(path, required=True).items()}
+    except (TypeError, ValueError) as problem:
+        raise ModelError(f"{path}: not a map of token texts to integer ids ({problem})") from None
+
+
 def _key(path: Path, document: Dict[str, Any], key: str) -> Any:
     if key not in document:
         raise ModelError(f"{path}: no {key!r}; transformers' Whisper config has it")
@@ -106,7 +114,7 @@ def load_optimum_manifest(directory: Path) -> WhisperManifest:
     """The WhisperManifest of an optimum export in ``directory``; ModelError names the file and key."""
     config_path, added_path = directory / MANIFEST_FILE, directory / ADDED_TOKENS_FILE
     config = _json(config_path, required=True)
-    added = {str(text): int(token) for text, token in _json(added_path, required=True).items()}
+    added = _token_ids(added_path)
     try:
         vocabulary_size = int(_key(config_path, config, "vocab_size"))
         mel_bands = int(_key(config_path, config, "num_mel_bins"))
@@ -143,9 +151,9 @@ def load_optimum_pieces(directory: Path, vocabulary_size: int) -> List[bytes]:
     """Each token's bytes, by id: vocab.json's through GPT-2's byte mapping, a special token's as its
     text; empty for an id neither file has (the timestamps older tokenizers do not list)."""
     path = directory / VOCABULARY_FILE
-    texts = {int(token): (text, True) for text, token in _json(path, required=True).items()}
-    added = _json(directory / ADDED_TOKENS_FILE, required=True)
-    texts.update({int(token): (text, False) for text, token in added.items()})
+    texts = {token: (text, True) for text, token in _token_ids(path).items()}
+    added = _token_ids(directory / ADDED_TOKENS_FILE)
+    texts.update({token: (text, False) for text, token in added.items()})
     decoder = gpt2_byte_decoder()
     pieces = [b""] * vocabulary_size
     for token, (text, byte_level) in texts.items():

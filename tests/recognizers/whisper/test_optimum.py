@@ -178,6 +178,10 @@ def test_older_exports_keep_the_rules_in_config_json(tmp_path: Path) -> None:
         ),
         (lambda d: (d / "vocab.json").write_text("[1]"), r"vocab.json: not a JSON object"),
         (
+            lambda d: _edit_json(d, "added_tokens.json", **{"<|endoftext|>": "end"}),
+            r"added_tokens.json: not a map of token texts to integer ids \(invalid literal",
+        ),
+        (
             lambda d: onnx.save(
                 onnx.load(str(whisper_tones_model_directory() / "decoder.onnx")),
                 str(d / "decoder_model_merged.onnx"),
@@ -196,6 +200,7 @@ def test_older_exports_keep_the_rules_in_config_json(tmp_path: Path) -> None:
         "notimestamps",
         "byte-mapping",
         "not-object",
+        "non-integer-id",
         "no-cache",
         "encoder",
     ],
