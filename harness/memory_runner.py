@@ -12,9 +12,10 @@ from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal, MemoryPublisher
 from speech_event.interfaces.action import ACTION_NAME
-from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, String
+from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, String, TranscriptMessage
 from speech_event.node import SpeechEventNode
 from speech_event.ports import Timer
+from speech_event.topics import PARTIAL_TOPIC, TRANSCRIPT_TOPIC
 
 SOUND_DETECTION = "soundDetection"
 
@@ -75,11 +76,21 @@ class _InMemory:
         self.outcome = Outcome()
         self._played = 0
         bus.subscribe(TEXT_TOPIC, String, self._on_text)
+        bus.subscribe(PARTIAL_TOPIC, String, self._on_partial)
+        bus.subscribe(TRANSCRIPT_TOPIC, TranscriptMessage, self._on_transcript)
         bus.on_goal_end(self._on_goal_end)
 
     def _on_text(self, message: object) -> None:
         text = message.data  # type: ignore[attr-defined]
         self.outcome.published.append(Published(self._clock.now(), text, self._played))
+
+    def _on_partial(self, message: object) -> None:
+        text = message.data  # type: ignore[attr-defined]
+        self.outcome.partials.append(Published(self._clock.now(), text, self._played))
+
+    def _on_transcript(self, message: object) -> None:
+        assert isinstance(message, TranscriptMessage)
+        self.outcome.transcripts.append(message)
 
     def _on_goal_end(self, goal: MemoryGoal) -> None:
         transcription = getattr(goal.result, "transcription", "")

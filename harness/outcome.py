@@ -1,7 +1,12 @@
-"""What a replay observed: the texts the node published, its service responses, its action results."""
+"""What a replay observed: the texts the node published (final, partial, and their transcript
+messages), its service responses, its action results."""
 
 from dataclasses import dataclass, field
 from typing import List
+
+from speech_event.messages import TranscriptMessage
+
+MEMORY, SIM_TIME, REAL_TIME = "memory", "sim time", "real time"
 
 
 @dataclass(frozen=True)
@@ -19,6 +24,14 @@ class Outcome:
     responses: List[int] = field(default_factory=list)
     # One per action goal, in the order they ended, written by result_text.
     results: List[Published] = field(default_factory=list)
+    # What came on /speechEvent/partial, and every /speechEvent/transcript message.
+    partials: List[Published] = field(default_factory=list)
+    transcripts: List[TranscriptMessage] = field(default_factory=list)
+    # Whose clock the replay ran on: MEMORY (the fake clock: the times of partial texts and of
+    # transcript messages are checked to the millisecond), SIM_TIME (ROS time driven by the
+    # replay: their texts and order are), REAL_TIME (the wall clock: when a partial comes decides
+    # what it has heard, so neither is compared; the final texts are).
+    clock: str = "memory"
     # In memory: each time one of the node's own timers fired (health checks, utterance ends by
     # whatever rule ended them, goal deadlines, ...). A ROS replay stops its clock at each.
     node_timers: List[float] = field(default_factory=list)

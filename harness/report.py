@@ -1,10 +1,11 @@
 """One PASS/FAIL line per scenario; for a failure, a diff of expected versus observed."""
 
 import difflib
-from typing import List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
-from harness.outcome import Outcome, Published
-from harness.scenario import Scenario
+from harness.outcome import MEMORY, REAL_TIME, Outcome, Published
+from harness.scenario import TRANSCRIPT_TIMES, Scenario
+from speech_event.messages import TranscriptMessage
 
 
 def _checks(scenario: Scenario, outcome: Outcome) -> List[Tuple[str, Sequence[str], Sequence[str]]]:
@@ -18,7 +19,53 @@ def _checks(scenario: Scenario, outcome: Outcome) -> List[Tuple[str, Sequence[st
         )
     if scenario.expected_results is not None:
         checks.append(("results", scenario.expected_results, [result.text for result in outcome.results]))
+    if scenario.expected_partials is not None and outcome.clock != REAL_TIME:
+        timed = outcome.clock == MEMORY
+        checks.append(
+            (
+                "partials",
+                [_partial(partial.at, partial.text, timed) for partial in scenario.expected_partials],
+                [_partial(partial.time, partial.text, timed) for partial in outcome.partials],
+            )
+        )
+    if scenario.expected_transcripts is not None and outcome.clock != REAL_TIME:
+        expected = [
+            {
+                key: value
+                for key, value in fields.items()
+                if outcome.clock == MEMORY or key not in TRANSCRIPT_TIMES
+            }
+            for fields in scenario.expected_transcripts
+        ]
+        observed = [_fields(message, fields) for message, fields in zip(outcome.transcripts, expected)]
+        # Messages beyond those expected are shown with the required fields.
+        observed += [
+            _fields(message, {"text": 0, "final": 0}) for message in outcome.transcripts[len(expected) :]
+        ]
+        checks.append(
+            ("transcripts", [_written(fields) for fields in expected], [_written(f) for f in observed])
+        )
     return checks
+
+
+def _partial(time: float, text: str, timed: bool) -> str:
+    """A partial text as its check compares it: with its time to the millisecond where ``timed``."""
+    return f"t={time:.3f} s  {text!r}" if timed else repr(text)
+
+
+def _fields(message: TranscriptMessage, like: Dict[str, object]) -> Dict[str, object]:
+    """The fields of ``message`` that ``like`` names."""
+    return {key: getattr(message, key) for key in like}
+
+
+def _written(fields: Dict[str, object]) -> str:
+    """One transcript message's fields as a check compares them: numbers to 3 places."""
+    return ", ".join(
+        f"{key}={value:.3f}"
+        if isinstance(value, (int, float)) and not isinstance(value, bool)
+        else f"{key}={value!r}"
+        for key, value in fields.items()
+    )
 
 
 def passed(scenario: Scenario, outcome: Outcome) -> bool:

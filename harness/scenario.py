@@ -88,6 +88,28 @@ Step = Union[Say, Silence, Noise, Malformed, Outage, Enable, Language, SetGramma
 
 
 @dataclass(frozen=True)
+class ExpectedPartial:
+    """A text on /speechEvent/partial and when it comes (checked in memory; on ROS, the order)."""
+
+    at: float
+    text: str
+
+
+# A transcript expectation's keys and their types (msg/Transcript.msg); text and final are required.
+TRANSCRIPT_FIELDS: Dict[str, Union[type, Tuple[type, ...]]] = {
+    "text": str,
+    "final": bool,
+    "confidence": (int, float),
+    "language": str,
+    "engine": str,
+    "first_block": (int, float),
+    "last_block": (int, float),
+}
+# Times on the node's clock: checked in memory, where they are the node's own to the instant.
+TRANSCRIPT_TIMES = ("first_block", "last_block")
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     source: str
@@ -98,6 +120,11 @@ class Scenario:
     # (see harness/report.py for how a result is written); None: not checked.
     expected_responses: Optional[Tuple[int, ...]] = None
     expected_results: Optional[Tuple[str, ...]] = None
+    # Every text on /speechEvent/partial, in order, with its scenario time; None: not checked.
+    expected_partials: Optional[Tuple[ExpectedPartial, ...]] = None
+    # Every /speechEvent/transcript message, in order: the fields given (TRANSCRIPT_FIELDS); None:
+    # not checked.
+    expected_transcripts: Optional[Tuple[Mapping[str, Any], ...]] = None
     voice: str = "tones"
     recognizer: str = "fake"
     background_noise_db: Optional[float] = None
@@ -229,12 +256,18 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         _next_to(_step(table, f"{source}: steps[{number}]"), source)
         for number, table in enumerate(steps_table)
     )
-    expect = _Reader(top.get("expect", dict), source + ": [expect]", ("published", "responses", "results"))
+    expect = _Reader(
+        top.get("expect", dict),
+        source + ": [expect]",
+        ("published", "responses", "results", "partials", "transcripts"),
+    )
     published = expect.get("published", list)
     if not all(isinstance(text, str) for text in published):
         raise ScenarioError(f"{source}: [expect]: 'published' must be a list of strings")
     responses = expect.optional_list("responses", int, "integers (1 accepted, 0 rejected)")
     results = expect.optional_list("results", str, "strings")
+    partials = expect.optional_list("partials", dict, 'tables such as { at = 0.75, text = "go to" }')
+    transcripts = expect.optional_list("transcripts", dict, 'tables such as { text = "go", final = true }')
     voice = top.choice("voice", tuple(VOICES), "tones")
     for number, step in enumerate(steps):
         problem = VOICES[voice].problem_with(step.text) if isinstance(step, Say) else None
@@ -249,11 +282,35 @@ def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEve
         expected=tuple(published),
         expected_responses=responses,
         expected_results=results,
+        expected_partials=None
+        if partials is None
+        else tuple(
+            _partial(table, f"{source}: [expect]: partials[{number}]")
+            for number, table in enumerate(partials)
+        ),
+        expected_transcripts=None
+        if transcripts is None
+        else tuple(
+            _transcript(table, f"{source}: [expect]: transcripts[{number}]")
+            for number, table in enumerate(transcripts)
+        ),
         voice=voice,
         recognizer=top.choice("recognizer", RECOGNIZERS, "fake"),
         background_noise_db=None if noise_db is None else float(noise_db),
         seed=int(top.get("seed", int, 0)),
     )
+
+
+def _partial(table: Mapping[str, Any], where: str) -> ExpectedPartial:
+    reader = _Reader(table, where, ("at", "text"))
+    return ExpectedPartial(reader.seconds("at", allow_zero=True), reader.get("text", str))
+
+
+def _transcript(table: Mapping[str, Any], where: str) -> Mapping[str, Any]:
+    reader = _Reader(table, where, tuple(TRANSCRIPT_FIELDS))
+    for key in ("text", "final"):
+        reader.get(key, TRANSCRIPT_FIELDS[key])  # required
+    return {key: reader.get(key, kind) for key, kind in TRANSCRIPT_FIELDS.items() if key in table}
 
 
 def _next_to(step: Step, source: str) -> Step:

@@ -49,6 +49,7 @@ if TYPE_CHECKING:  # for type checkers; at run time each name is imported when f
         SetLanguageRequest,
         SetLanguageResponse,
         String,
+        TranscriptMessage,
     )
     from speech_event.node import SpeechEventNode
     from speech_event.ports import (
@@ -58,6 +59,7 @@ if TYPE_CHECKING:  # for type checkers; at run time each name is imported when f
         Clock,
         Executor,
         Grammars,
+        Incremental,
         Publisher,
         PublisherStatus,
         Recognizer,
@@ -67,7 +69,14 @@ if TYPE_CHECKING:  # for type checkers; at run time each name is imported when f
         Transport,
     )
     from speech_event.recognizers import RECOGNIZERS, RecognizerFactory, engine_builder
-    from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
+    from speech_event.topics import (
+        PARTIAL_TOPIC,
+        SIGNAL_TOPIC,
+        SOUND_DETECTION_DOWN,
+        SPEECH_NOT_RECOGNIZED,
+        TEXT_TOPIC,
+        TRANSCRIPT_TOPIC,
+    )
 
 # Imported on first use, so that importing speech_event (or the ROS classes genpy builds in it,
 # speech_event.srv and speech_event.msg, as rosservice does under the system Python) needs no numpy.
@@ -88,6 +97,7 @@ _EXPORTS: Dict[str, str] = {
     "Grammar": "speech_event.grammar",
     "GrammarError": "speech_event.errors",
     "Grammars": "speech_event.ports",
+    "Incremental": "speech_event.ports",
     "InMemoryBus": "speech_event.adapters.memory_bus",
     "KeyValue": "speech_event.messages",
     "load_config": "speech_event.config",
@@ -96,6 +106,7 @@ _EXPORTS: Dict[str, str] = {
     "MultiArrayDimension": "speech_event.messages",
     "MultiArrayLayout": "speech_event.messages",
     "parse_config": "speech_event.config",
+    "PARTIAL_TOPIC": "speech_event.topics",
     "Publisher": "speech_event.ports",
     "PublisherStatus": "speech_event.ports",
     "RECOGNISE_SPEECH": "speech_event.messages",
@@ -128,10 +139,13 @@ _EXPORTS: Dict[str, str] = {
     "ThreadExecutor": "speech_event.adapters.executors",
     "Timer": "speech_event.ports",
     "Transcript": "speech_event.ports",
+    "TRANSCRIPT_TOPIC": "speech_event.topics",
+    "TranscriptMessage": "speech_event.messages",
     "Transport": "speech_event.ports",
 }
 
 __all__ = [
+    "PARTIAL_TOPIC",
     "RECOGNISE_SPEECH",
     "RECOGNIZERS",
     "SET_ENABLED",
@@ -141,6 +155,7 @@ __all__ = [
     "SOUND_DETECTION_DOWN",
     "SPEECH_NOT_RECOGNIZED",
     "TEXT_TOPIC",
+    "TRANSCRIPT_TOPIC",
     "ActionGoal",
     "Audio",
     "Cancellable",
@@ -156,6 +171,7 @@ __all__ = [
     "GrammarError",
     "Grammars",
     "InMemoryBus",
+    "Incremental",
     "KeyValue",
     "ModelError",
     "MultiArrayDimension",
@@ -182,6 +198,7 @@ __all__ = [
     "ThreadExecutor",
     "Timer",
     "Transcript",
+    "TranscriptMessage",
     "Transport",
     "apply_overrides",
     "engine_builder",

@@ -80,10 +80,15 @@ class SpeechEventConfig:
     # text two speculations in a row agreed on.
     early_pause: float = 0.0
     complete_answers: str = "yes,no,yego,oya"
+    # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
+    # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
+    partial_period: float = 0.5
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
 QUANTIZATIONS = ("none", "int8")
+# Partial results more often than this would only keep the worker busy: no one reads that fast.
+SHORTEST_PARTIAL_PERIOD = 0.1
 # soundDetection's block: 4096 samples (85 ms at 48 kHz); blocks of one utterance come this far apart.
 SOUND_DETECTION_BLOCK = 4096
 
@@ -112,6 +117,11 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"early_pause {config.early_pause} s needs speculative_recognition true and must be from "
             f"speculation_gap ({config.speculation_gap} s) to less than speech_pause_period "
             f"({config.speech_pause_period} s)"
+        )
+    if 0 < config.partial_period < SHORTEST_PARTIAL_PERIOD:
+        return (
+            f"partial_period {config.partial_period} s is too short: 0 (partial results off) or from "
+            f"{SHORTEST_PARTIAL_PERIOD} to 60 s"
         )
     if config.grammar and config.pocketsphinx_keywords:
         return "set grammar (pocketsphinx_grammar) or pocketsphinx_keywords, not both"
@@ -168,6 +178,7 @@ _FORMAT = KeyValueFormat(
         "speculation_gap": seconds(0.05, 60.0),
         "early_pause": seconds(0.0, 60.0),
         "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
+        "partial_period": seconds(0.0, 60.0),
     },
     # The robot's v1.1 spellings.
     aliases={

@@ -44,6 +44,29 @@ class String:
     data: str = ""
 
 
+# What /speechEvent/transcript carries for a text without an engine's confidence, and for a text
+# of no utterance (an error such as SOUND_DETECTION_DOWN): its first_block and last_block.
+NO_CONFIDENCE = -1.0
+NO_UTTERANCE = 0.0
+
+
+@dataclass(frozen=True)
+class TranscriptMessage:
+    """speech_event/Transcript (msg/Transcript.msg): one partial or final text with its confidence,
+    language, engine and the times of its utterance's first and last blocks. Times are seconds on
+    the node's clock; the ROS adapter makes ``stamp`` the header's stamp."""
+
+    _type: ClassVar[str] = "speech_event/Transcript"
+    stamp: float
+    text: str
+    final: bool
+    confidence: float  # the engine's, 0 to 1; NO_CONFIDENCE when it reports none
+    language: str
+    engine: str
+    first_block: float
+    last_block: float
+
+
 def message_type_name(message: object) -> str:
     """The ROS type name of a message, or its Python class name when it has none."""
     return str(getattr(message, "_type", type(message).__name__))

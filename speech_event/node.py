@@ -8,8 +8,9 @@ same object runs on the in-memory bus, on a real roscore, and on the robot.
 
 This module is the wiring. The steps live in ``speech_event.pipeline``, the robot's interfaces
 around them in ``speech_event.interfaces``, and the rules in modules of their own: when an
-utterance ends (``turn_taking``), when to speculate (``speculation``), the recognition timeout
-(``watchdog``) and the periodic checks (``health``). They are called under the node's lock.
+utterance ends (``turn_taking``), when to speculate (``speculation``), when to publish a partial
+text (``partials``), the recognition timeout (``watchdog``) and the periodic checks (``health``).
+They are called under the node's lock.
 """
 
 import functools
@@ -40,17 +41,29 @@ from speech_event.interfaces.services import (
 )
 from speech_event.interfaces.storage import store_for
 from speech_event.messages import RECOGNISE_SPEECH, SET_ENABLED, SET_GRAMMAR, SET_LANGUAGE, Float32MultiArray
+from speech_event.partials import PartialCounts, PartialFeed, PartialRules
 from speech_event.pipeline.assembly import UtteranceAssembler
-from speech_event.pipeline.publication import Publication
+from speech_event.pipeline.publication import Publication, TextOrigin
 from speech_event.pipeline.recognition import Recognition
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
-from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Timer, Transport
+from speech_event.ports import (
+    Audio,
+    Clock,
+    Executor,
+    Incremental,
+    PublisherStatus,
+    Recognizer,
+    Stoppable,
+    Timer,
+    Transcript,
+    Transport,
+)
 from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
-from speech_event.turn_taking import TurnTaking
+from speech_event.turn_taking import RearmingTimer, TurnTaking
 from speech_event.watchdog import Watchdog
 
 _LOG = logging.getLogger("speech_event")
@@ -90,7 +103,7 @@ class SpeechEventNode:
         self._queue = RecognitionQueue(config.max_backlog)
         self._running: Optional[RecognitionJob] = None  # the utterance being recognized
         self._action = ListenAction(clock, self._refusal)
-        self._publication = Publication(config, self._statistics, self._action, self._store)
+        self._publication = Publication(config, self._statistics, self._action, self._store, clock.now)
         self._control = RuntimeControl(
             LanguageEngines(config.language, recognizer, build_engine),
             self._in_force,
@@ -110,6 +123,10 @@ class SpeechEventNode:
         self._turn = TurnTaking(config, clock, self._lock, self._close_utterance, self._maybe_speculate)
         self._speculation = SpeculationRules(config)
         self.speculations: SpeculationCounts = self._speculation.counts  # how speculation fared
+        self._partials = PartialRules(config)
+        self.partials: PartialCounts = self._partials.counts  # how partial results fared
+        self._partial_timer = RearmingTimer(clock, self._lock, self._partials.due, self._maybe_partial)
+        self._stopwatch = stopwatch
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         self._health = Health(
             config, transport, clock, self._statistics, self._state, self._sound_detection_down
@@ -182,6 +199,8 @@ class SpeechEventNode:
         with self._lock:
             self._turn.stop()
             self._speculation.drop()
+            self._partials.drop()
+            self._partial_timer.cancel()
 
     def flush_storage(self) -> None:
         """Wait until every utterance transcribed so far is stored (when storing is on)."""
@@ -214,20 +233,27 @@ class SpeechEventNode:
             if self._assembler.pending_samples == 0:
                 self._collecting_since = arrival
                 self._action.utterance_started(arrival)
+                self._partials.begin(arrival)
             completed = self._assembler.add(signal.samples)
             if completed:  # cut at the length limit: what is left is a new utterance to speculate on
                 self._speculation.new_utterance()
             for index, utterance in enumerate(completed):
                 # Cut at the length limit: the speech goes on in the next utterance.
-                self._submit(utterance, index < len(completed) - 1 or self._assembler.pending_samples > 0)
+                more_follows = index < len(completed) - 1 or self._assembler.pending_samples > 0
+                self._submit(utterance, more_follows, arrival)
+            if completed:
+                self._partials.begin(arrival)  # what is left is a new utterance
             self._turn.heard(arrival)
+            if self._partials.on:
+                self._partial_timer.arm()
 
     def _close_utterance(self) -> None:
         """Under the lock: the pause after the utterance being collected has passed."""
         self._speculation.new_utterance()
+        self._partial_timer.cancel()
         utterance = self._assembler.close()
         if utterance is not None:
-            self._submit(utterance, more_follows=False)
+            self._submit(utterance, False, self._turn.last_arrival)
 
     # -- speculative recognition (speech_event/speculation.py) ------------------------------------
 
@@ -238,6 +264,7 @@ class SpeechEventNode:
         collecting = self._enabled and self._assembler.pending_samples > 0 and self._turn.gap_passed()
         if not (collecting and self._speculation.may_start(self._recognizer, idle)):
             return
+        self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = self._assembler.peek()
         speculation = self._speculation.start(audio.size, self._recognizer, self._grammar)
         speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
@@ -249,16 +276,73 @@ class SpeechEventNode:
                 return
             speculation.running = True
         outcome = self._recognition(audio, speculation.recognizer, speculation.grammar)
+        partial: Optional[Transcript] = None
         with self._lock:
             job = self._speculation.finished(speculation, outcome)
             if job is None:
                 if self._speculation.ends_turn(speculation):
                     self._turn.end_early()
-                return
-        self._publication.conclude(job, outcome)
+                if not speculation.cancelled:  # the utterance so far: its text is a partial too
+                    partial = self._partials.spoken(speculation.samples, outcome.answer)
+                origin = self._origin()
+        if job is not None:
+            self._publication.conclude(job, outcome)
+        elif partial is not None:
+            self._publication.partial(partial, origin)
 
-    def _submit(self, audio: Audio, more_follows: bool) -> None:
+    # -- partial results (speech_event/partials.py) -----------------------------------------------
+
+    def _maybe_partial(self) -> None:
+        """Under the lock: ask for the text of the utterance so far if a partial is due and the
+        worker is idle (no closed utterance, no speculation)."""
+        idle = self._running is None and self._queue.waiting == 0 and self._speculation.current is None
+        pending, now = self._assembler.pending_samples, self._clock.now()
+        if not (self._enabled and self._partials.may_start(self._recognizer, idle, pending, now)):
+            return
+        audio, origin = self._assembler.peek(), self._origin()
+        if isinstance(self._recognizer, Stoppable):
+            run = self._partials.start_run(audio.size, self._recognizer, self._grammar, now)
+            run.handle = self._executor.submit(functools.partial(self._partial_run, run, audio, origin))
+        elif isinstance(self._recognizer, Incremental):
+            feed = self._partials.start_feed(self._recognizer, self._grammar, now)
+            job = functools.partial(self._partial_feed, feed, audio[feed.fed :], origin)
+            feed.fed, feed.handle = audio.size, self._executor.submit(job)
+
+    def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
+        """An executor job: a Stoppable engine's text of the utterance so far."""
+        with self._lock:
+            if run.cancelled:
+                return
+            run.running = True
+        outcome = self._recognition(audio, run.recognizer, run.grammar)
+        with self._lock:
+            partial = self._partials.finished(run, outcome)
+            self._maybe_partial()  # more audio came meanwhile
+        if partial is not None:
+            self._publication.partial(partial, origin)
+
+    def _partial_feed(self, feed: PartialFeed, audio: Audio, origin: TextOrigin) -> None:
+        """An executor job: an Incremental engine fed the new audio of the utterance so far."""
+        began = self._stopwatch()
+        try:
+            answer = feed.feed(audio)
+        except (Exception, SystemExit):  # no partial; the final recognition says what failed
+            _LOG.debug("a partial result failed", exc_info=True)
+            answer = None
+        with self._lock:
+            partial = self._partials.fed(feed, answer, self._stopwatch() - began)
+            self._maybe_partial()  # more audio came meanwhile
+        if partial is not None:
+            self._publication.partial(partial, origin)
+
+    def _origin(self) -> TextOrigin:
+        """Under the lock: the origin of a text of the utterance collected so far."""
+        first = self._collecting_since if self._collecting_since is not None else self._turn.last_arrival
+        return TextOrigin(self._language, type(self._recognizer).__name__, first, self._turn.last_arrival)
+
+    def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:
         """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
+        self._partials.drop()  # the worker is wanted; no final text waits for a partial
         self._utterances += 1
         number, closed_at, recognizer = self._utterances, self._clock.now(), self._recognizer
         started_at = self._collecting_since if self._collecting_since is not None else closed_at
@@ -268,7 +352,15 @@ class SpeechEventNode:
         self._statistics.queued(seconds)
         self._action.utterance_closed(number, started_at, more_follows)
         job = RecognitionJob(
-            number, started_at, closed_at, audio, recognizer, self._language, seconds, self._grammar
+            number,
+            started_at,
+            closed_at,
+            last_block_at,
+            audio,
+            recognizer,
+            self._language,
+            seconds,
+            self._grammar,
         )
         speculation = self._speculation.adopt(job)
         if speculation is not None:
@@ -303,6 +395,7 @@ class SpeechEventNode:
                 if watchdog is not None:
                     watchdog.cancel()
                 self._maybe_speculate()  # the utterance being collected waited for this one
+                self._maybe_partial()
 
     def _still_running(self, job: RecognitionJob) -> bool:
         """Under the lock: whether ``job``'s recognition runs now (on the worker, or speculated)."""
@@ -321,6 +414,8 @@ class SpeechEventNode:
             if not enabled:
                 self._speculation.drop()
                 self._speculation.new_utterance()
+                self._partials.drop()
+                self._partial_timer.cancel()
                 self._turn.drop_turn()
                 if self._assembler.close() is not None:
                     self._statistics.discarded(DISCARDED_WHILE_DISABLED)
@@ -335,6 +430,7 @@ class SpeechEventNode:
         with self._lock:  # utterances closed before this finish with the old engine
             self._turn.end_pause_if_over()
             self._speculation.drop()
+            self._partials.drop()
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 
@@ -342,6 +438,7 @@ class SpeechEventNode:
         with self._lock:  # utterances closed before this finish with the old grammar
             self._turn.end_pause_if_over()
             self._speculation.drop()
+            self._partials.drop()
             self._grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)
 
@@ -361,7 +458,8 @@ class SpeechEventNode:
     # -- health and diagnostics -------------------------------------------------------------------
 
     def _sound_detection_down(self) -> None:
-        self._publication.publish(SOUND_DETECTION_DOWN)
+        language, engine = self._in_force()[:2]
+        self._publication.publish_error(SOUND_DETECTION_DOWN, language, type(engine).__name__)
         self._action.sound_detection_down()
 
     def _state(self, sound_detection: PublisherStatus) -> NodeState:

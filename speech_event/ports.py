@@ -2,7 +2,7 @@
 
 Adapters implement these: the in-memory bus and the rospy transport, the fake and ROS clocks,
 the recognition engines and their fakes, the simulated and threaded workers. What only some
-engines can do is a Protocol of its own (``Stoppable``, ``Grammars``), checked with
+engines can do is a Protocol of its own (``Stoppable``, ``Grammars``, ``Incremental``), checked with
 ``isinstance``: an engine has the ability by having its method.
 """
 
@@ -172,4 +172,25 @@ class Grammars(Protocol):
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
         """Decode within ``grammar`` from the next ``transcribe`` on; None: free speech again."""
+        ...
+
+
+@runtime_checkable
+class Incremental(Protocol):
+    """An engine that decodes a growing utterance on a decoder of its own, fed only the audio that
+    is new (pocketsphinx): partial results cost only the new audio and never touch the decoding
+    of final texts. Called on the recognition worker only, as ``transcribe`` is."""
+
+    @property
+    def sample_rate(self) -> int:
+        """The rate, in Hz, of the audio ``feed_partial`` expects."""
+        ...
+
+    def begin_partial(self, grammar: Optional[Grammar]) -> None:
+        """A new utterance on the partial decoder, within ``grammar`` (None: free speech); the
+        utterance before it, if any, is abandoned."""
+        ...
+
+    def feed_partial(self, audio: Audio) -> Transcript:
+        """The next samples of the utterance (at ``sample_rate``): the text of all of it so far."""
         ...

@@ -43,7 +43,15 @@ def _job(
     samples: int, recognizer: Recognizer, number: int = 1, grammar: Optional[Grammar] = None
 ) -> RecognitionJob:
     return RecognitionJob(
-        number, 0.0, 1.0, np.zeros(samples, dtype=np.float32), recognizer, "english", samples / 16000, grammar
+        number,
+        0.0,
+        1.0,
+        0.5,
+        np.zeros(samples, dtype=np.float32),
+        recognizer,
+        "english",
+        samples / 16000,
+        grammar,
     )
 
 

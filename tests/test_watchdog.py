@@ -37,7 +37,7 @@ class Rig:
 
 def _job(recognizer: Recognizer, number: int = 7, seconds: float = 2.5) -> RecognitionJob:
     audio = np.zeros(int(seconds * 16000), dtype=np.float32)
-    return RecognitionJob(number, 0.0, 0.0, audio, recognizer, "english", seconds)
+    return RecognitionJob(number, 0.0, 0.0, 0.0, audio, recognizer, "english", seconds)
 
 
 @pytest.mark.parametrize("timeout", [0.0, -1.0])

@@ -35,14 +35,14 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
 from harness.catalog import engine_for
-from harness.outcome import Outcome, Published, result_text
+from harness.outcome import REAL_TIME, SIM_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
 from harness.ros.schedule import TEXT_WAIT, TIMER_SETTLE, Schedule, scenario_start
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
 from harness.timeline import SendGoal, build_timeline
-from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers
 from speech_event.config import format_config
 from speech_event.interfaces.action import ACTION_NAME
@@ -54,6 +54,7 @@ from speech_event.messages import (
     SET_LANGUAGE,
     RecogniseSpeechGoal,
     ServiceType,
+    TranscriptMessage,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -129,10 +130,13 @@ class RosReplay:
         rospy.set_param("/use_sim_time", not options.real_time)
         rospy.init_node("speechEventReplay", disable_signals=True)
         self._clock = rospy.Publisher(CLOCK_TOPIC, Clock, queue_size=10, latch=True)
-        self._outcome = Outcome()
+        self._outcome = self._new_outcome()
         self._now = 0.0
         self._wall_start = time.monotonic()
         self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
+        rospy.Subscriber(PARTIAL_TOPIC, String, self._on_partial, queue_size=None)
+        transcript = generated_class(TranscriptMessage._type, "msg")
+        rospy.Subscriber(TRANSCRIPT_TOPIC, transcript, self._on_transcript, queue_size=None)
         action = generated_class(RECOGNISE_SPEECH.name + "Action", "msg")
         self._action_client = actionlib.ActionClient(ACTION_NAME, action)
         # A goal handle must be kept, or actionlib stops tracking its goal.
@@ -144,8 +148,28 @@ class RosReplay:
         """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
         return time.monotonic() - self._wall_start if self._options.real_time else self._now
 
+    def _new_outcome(self) -> Outcome:
+        return Outcome(clock=REAL_TIME if self._options.real_time else SIM_TIME)
+
     def _on_text(self, message: String) -> None:
         self._outcome.published.append(Published(self._scenario_time(), message.data))
+
+    def _on_partial(self, message: String) -> None:
+        self._outcome.partials.append(Published(self._scenario_time(), message.data))
+
+    def _on_transcript(self, message: Any) -> None:
+        self._outcome.transcripts.append(
+            TranscriptMessage(
+                stamp=message.header.stamp.to_sec(),
+                text=message.text,
+                final=message.final,
+                confidence=message.confidence,
+                language=message.language,
+                engine=message.engine,
+                first_block=message.first_block.to_sec(),
+                last_block=message.last_block.to_sec(),
+            )
+        )
 
     # -- the walk's runner (harness/player.py): the clock, the services and the action ----------
 
@@ -180,10 +204,12 @@ class RosReplay:
         In real time waiting would shift the events after it, so it waits only at the end."""
         if self._options.real_time and not final:
             return
-        texts, results = self._schedule.due(self._now, played)
+        texts, results, partials = self._schedule.due(self._now, played)
         deadline = time.monotonic() + TEXT_WAIT
         while time.monotonic() < deadline and (
-            len(self._outcome.published) < texts or len(self._outcome.results) < results
+            len(self._outcome.published) < texts
+            or len(self._outcome.results) < results
+            or len(self._outcome.partials) < partials
         ):
             time.sleep(0.002)
 
@@ -270,7 +296,7 @@ class RosReplay:
         start = scenario_start(float(rospy.get_param(START_TIME_PARAM, time.time())), time.time(), period)
         self._wall_start = time.monotonic() + (start - time.time())
         time.sleep(max(0.0, self._wall_start - time.monotonic()))
-        self._outcome = Outcome()  # what the node said before the scenario's t = 0 is no part of it
+        self._outcome = self._new_outcome()  # what the node said before the scenario's t = 0 is no part of it
 
     def _find_node(self) -> str:
         _, subscribers, _ = self._master.getSystemState()
@@ -306,7 +332,7 @@ class RosReplay:
     def play(self, scenario: Scenario) -> Outcome:
         timeline = build_timeline(scenario)
         self._schedule = Schedule.of(scenario)
-        self._outcome = Outcome()
+        self._outcome = self._new_outcome()
         self._goals = []
         self._node_uri = None  # the last scenario's node is gone, also when it failed
         self.advance_to(0.0)
@@ -328,7 +354,7 @@ class RosReplay:
         play(timeline, self, stand_ins, self._schedule.stops)
         # What was observed by the end of the timeline, before anything is torn down: a health
         # check between stopping soundDetection and stopping the node is no part of the scenario.
-        outcome, self._outcome = self._outcome, Outcome()
+        outcome, self._outcome = self._outcome, self._new_outcome()
         self._node_uri = None
         stand_ins.stop()
         self.processes.stop(node)

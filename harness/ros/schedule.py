@@ -42,14 +42,15 @@ class Schedule:
         fired in memory (every text and action result came at one of these or at an event)."""
         return self.rehearsal.node_timers
 
-    def due(self, now: float, played: int) -> Tuple[int, int]:
-        """How many texts and action results the node had published by ``now`` in memory, with
-        ``played`` events played."""
+    def due(self, now: float, played: int) -> Tuple[int, int, int]:
+        """How many texts, action results and partial texts the node had published by ``now`` in
+        memory, with ``played`` events played."""
 
         def count(items: List[Published]) -> int:
             return sum(1 for item in items if item.time <= now and item.played <= played)
 
-        return count(self.rehearsal.published), count(self.rehearsal.results)
+        rehearsal = self.rehearsal
+        return count(rehearsal.published), count(rehearsal.results), count(rehearsal.partials)
 
 
 def scenario_start(node_started: float, now: float, period: float) -> float:

@@ -61,6 +61,17 @@ def _to_ros(message: object) -> object:
         ]
         header = std_msgs.Header(stamp=rospy.Time.from_sec(message.stamp))
         return diagnostic_msgs.DiagnosticArray(header=header, status=statuses)
+    if isinstance(message, messages.TranscriptMessage):
+        return generated_class(message._type, "msg")(
+            header=std_msgs.Header(stamp=rospy.Time.from_sec(message.stamp)),
+            text=message.text,
+            final=message.final,
+            confidence=message.confidence,
+            language=message.language,
+            engine=message.engine,
+            first_block=rospy.Time.from_sec(message.first_block),
+            last_block=rospy.Time.from_sec(message.last_block),
+        )
     if isinstance(message, messages.Float32MultiArray):
         dims = [std_msgs.MultiArrayDimension(d.label, d.size, d.stride) for d in message.layout.dim]
         layout = std_msgs.MultiArrayLayout(dim=dims, data_offset=message.layout.data_offset)
@@ -68,17 +79,18 @@ def _to_ros(message: object) -> object:
     return message  # already a rospy message
 
 
-_ROS_TYPES: Dict[type, type] = {
-    messages.String: std_msgs.String,
-    messages.Float32MultiArray: std_msgs.Float32MultiArray,
-    messages.DiagnosticArray: diagnostic_msgs.DiagnosticArray,
-}
-
-
 def generated_class(type_name: str, kind: str) -> Any:
     """The genpy class of ``package/Name`` in the package's ``msg`` or ``srv`` module."""
     package, name = type_name.split("/")
     return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+_ROS_TYPES: Dict[type, type] = {
+    messages.String: std_msgs.String,
+    messages.Float32MultiArray: std_msgs.Float32MultiArray,
+    messages.DiagnosticArray: diagnostic_msgs.DiagnosticArray,
+    messages.TranscriptMessage: generated_class(messages.TranscriptMessage._type, "msg"),
+}
 
 
 def _from_ros(ours: type, message: object) -> Any:

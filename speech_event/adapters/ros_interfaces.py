@@ -1,8 +1,8 @@
-"""Builds the Python classes of the node's ROS interfaces (srv/, action/) with Debian's genpy.
+"""Builds the Python classes of the node's ROS interfaces (msg/, srv/, action/) with Debian's genpy.
 
-The definitions ship inside the package (``speech_event/definitions/{srv,action}``), so a wheel
-or sdist install has them too. On the robot catkin builds them (CMakeLists.txt: add_service_files,
-add_action_files); elsewhere this is the build step, no catkin workspace needed:
+The definitions ship inside the package (``speech_event/definitions/{msg,srv,action}``), so a wheel
+or sdist install has them too. On the robot catkin builds them (CMakeLists.txt: add_message_files,
+add_service_files, add_action_files); elsewhere this is the build step, no catkin workspace needed:
 ``python -m speech_event.adapters.ros_interfaces`` writes ``speech_event/msg`` and
 ``speech_event/srv`` next to the code, where catkin's install puts them too. The ROS adapter runs
 it on import when they are missing or older than their definitions. Where the package's folder
@@ -92,7 +92,8 @@ def generate(package: str, definitions: Path, out: Path) -> None:
 
 
 def _definitions() -> List[Path]:
-    return sorted([*(DEFINITIONS / "srv").glob("*.srv"), *(DEFINITIONS / "action").glob("*.action")])
+    kinds = (("msg", "*.msg"), ("srv", "*.srv"), ("action", "*.action"))
+    return sorted(path for kind, pattern in kinds for path in (DEFINITIONS / kind).glob(pattern))
 
 
 def output_directory(writable: bool) -> Path:

@@ -1,22 +1,34 @@
 """publish: what recognition made of a closed utterance becomes the text on /speechEvent/text,
-the action's result, the statistics and, when storing is on, the stored record."""
+the action's result, the statistics and, when storing is on, the stored record; with each text
+published, and each partial text (/speechEvent/partial), a message on /speechEvent/transcript
+with its confidence, language, engine and the times of its utterance's blocks."""
 
 import functools
 import logging
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Callable, Optional
 
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.action import ListenAction
 from speech_event.interfaces.diagnostics import NodeStatistics
 from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
-from speech_event.messages import String
+from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, String, TranscriptMessage
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.transcript import checked_transcript, text_to_publish
 from speech_event.ports import Publisher, Transcript, Transport
-from speech_event.topics import TEXT_TOPIC
+from speech_event.topics import PARTIAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 
 _LOG = logging.getLogger("speech_event")
+
+
+@dataclass(frozen=True)
+class TextOrigin:
+    """Where a text comes from, for its /speechEvent/transcript message."""
+
+    language: str
+    engine: str  # the engine's class name
+    first_block: float  # when the utterance's first block arrived (NO_UTTERANCE: no utterance)
+    last_block: float  # when its last block, so far for a partial, arrived
 
 
 @dataclass
@@ -27,16 +39,50 @@ class Publication:
     statistics: NodeStatistics
     action: ListenAction
     store: Optional[UtteranceStore]
-    _publisher: Optional[Publisher] = field(default=None, init=False)
+    now: Callable[[], float]  # the node's clock: the transcript messages' stamps
+    _text: Optional[Publisher] = field(default=None, init=False)
+    _partial: Optional[Publisher] = field(default=None, init=False)
+    _transcript: Optional[Publisher] = field(default=None, init=False)
 
     def start(self, transport: Transport) -> None:
-        """Advertise the text topic."""
-        self._publisher = transport.advertise(TEXT_TOPIC, String)
+        """Advertise the text, partial and transcript topics."""
+        self._text = transport.advertise(TEXT_TOPIC, String)
+        self._partial = transport.advertise(PARTIAL_TOPIC, String)
+        self._transcript = transport.advertise(TRANSCRIPT_TOPIC, TranscriptMessage)
 
-    def publish(self, text: str) -> None:
-        """Publish ``text`` on the text topic (nothing before ``start``)."""
-        if self._publisher is not None:
-            self._publisher.publish(String(text))
+    def publish(self, text: str, origin: TextOrigin, confidence: Optional[float] = None) -> None:
+        """Publish a final ``text`` on the text topic, and its transcript message (nothing
+        before ``start``)."""
+        if self._text is not None:
+            self._text.publish(String(text))
+        self._publish_transcript(text, True, confidence, origin)
+
+    def publish_error(self, text: str, language: str, engine: str) -> None:
+        """Publish an error of no utterance (SOUND_DETECTION_DOWN) as a final text."""
+        self.publish(text, TextOrigin(language, engine, NO_UTTERANCE, NO_UTTERANCE))
+
+    def partial(self, transcript: Transcript, origin: TextOrigin) -> None:
+        """Publish the text so far of the utterance being spoken, and its transcript message."""
+        if self._partial is not None:
+            self._partial.publish(String(transcript.text))
+        self._publish_transcript(transcript.text, False, transcript.confidence, origin)
+
+    def _publish_transcript(
+        self, text: str, final: bool, confidence: Optional[float], origin: TextOrigin
+    ) -> None:
+        if self._transcript is None:
+            return
+        message = TranscriptMessage(
+            stamp=self.now(),
+            text=text,
+            final=final,
+            confidence=NO_CONFIDENCE if confidence is None else float(confidence),
+            language=origin.language,
+            engine=origin.engine,
+            first_block=origin.first_block,
+            last_block=origin.last_block,
+        )
+        self._transcript.publish(message)
 
     def conclude(self, job: RecognitionJob, outcome: RecognitionOutcome) -> None:
         """Publish what recognition made of ``job``, tell the action, store it."""
@@ -72,7 +118,9 @@ class Publication:
             else:
                 _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
             if text is not None:
-                self.publish(text)
+                engine = type(recognizer).__name__
+                origin = TextOrigin(job.language, engine, job.started_at, job.last_block_at)
+                self.publish(text, origin, transcript.confidence)
                 self.statistics.published()
         self.action.utterance_done(number, None if discard is not None else text or "")
         if self.store is not None:  # after publishing: storing never delays or loses a transcript

@@ -39,6 +39,7 @@ class RecognitionJob:
     number: int
     started_at: float  # when its first block arrived
     closed_at: float
+    last_block_at: float  # when its last block arrived
     audio: np.ndarray
     recognizer: Recognizer  # the engine in use when the utterance closed
     language: str  # the language of that engine

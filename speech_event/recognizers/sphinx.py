@@ -73,7 +73,7 @@ _FREE_SETTINGS: Mapping[str, _Setting] = {
 
 class SphinxRecognizer:
     """The Recognizer port on pocketsphinx: its English language model, a command grammar (speech
-    outside it rejected), or a keyword list. Implements ``Grammars``."""
+    outside it rejected), or a keyword list. Implements ``Grammars`` and ``Incremental``."""
 
     def __init__(
         self,
@@ -98,6 +98,11 @@ class SphinxRecognizer:
         self._searches: Dict[str, str] = {}  # JSGF text -> its search, compiled once
         self._search: Optional[str] = None  # the grammar's search in force; None: language model
         self._last_ratio: Optional[float] = None
+        # Partial results (Incremental) decode on a third decoder, made at the first partial, so
+        # they never change what the others decode; its searches are named by their JSGF text.
+        self._partial: Any = None
+        self._partial_searches: Dict[str, str] = {}
+        self._partial_open = False  # an utterance is being fed to it
         if keywords:
             self._plain_decoder().add_kws("keywords", keywords)
             self._plain_decoder().activate_search("keywords")
@@ -151,7 +156,7 @@ class SphinxRecognizer:
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         """The text of one utterance; with a grammar, a whole phrase of it or none (``rejected``)."""
-        pcm = np.clip(np.round(audio * 32767.0), -32768, 32767).astype("<i2").tobytes()
+        pcm = _pcm(audio)
         self._last_ratio = None
         if self._search is not None:
             return self._within_grammar(self._search, pcm)
@@ -162,6 +167,46 @@ class SphinxRecognizer:
         hypothesis = decoder.hyp()
         # No confidence: pocketsphinx computes no posterior unless asked to (its prob stays 0).
         return Transcript("" if hypothesis is None else " ".join(hypothesis.hypstr.split()))
+
+    def begin_partial(self, grammar: Optional[Grammar]) -> None:
+        """A new utterance on the partial decoder, in the mode of final texts: the keyword list,
+        ``grammar``, or the language model."""
+        decoder = self._partial_decoder()
+        if self._partial_open:
+            decoder.end_utt()
+        if grammar is not None and not self._keywords:
+            search = self._partial_searches.get(grammar.jsgf)
+            if search is None:
+                search = f"grammar{len(self._partial_searches)}"
+                decoder.add_jsgf_string(search, grammar.jsgf)
+                self._partial_searches[grammar.jsgf] = search
+            decoder.activate_search(search)
+        else:
+            decoder.activate_search(self._partial_searches[""])
+        decoder.start_utt()
+        self._partial_open = True
+
+    def feed_partial(self, audio: np.ndarray) -> Transcript:
+        """The best path so far after ``audio`` (for a grammar: the phrase so far, which need not
+        be whole; for keywords: the keywords heard so far)."""
+        decoder = self._partial_decoder()
+        decoder.process_raw(_pcm(audio), no_search=False, full_utt=False)
+        hypothesis = decoder.hyp()
+        return Transcript("" if hypothesis is None else " ".join(hypothesis.hypstr.split()))
+
+    def _partial_decoder(self) -> Any:
+        """The decoder of partial results: the forward search only (no second pass, no lattice),
+        which is what a text so far needs; its free search named by the empty JSGF text."""
+        if self._partial is None:
+            from pocketsphinx import Decoder
+
+            decoder = Decoder(samprate=SAMPLE_RATE, loglevel="FATAL", fwdflat=False, bestpath=False)
+            if self._keywords:
+                decoder.add_kws("keywords", self._keywords)
+                decoder.activate_search("keywords")
+            self._partial_searches[""] = decoder.current_search()
+            self._partial = decoder
+        return self._partial
 
     def _within_grammar(self, search: str, pcm: bytes) -> Transcript:
         decoder = self._grammars()
@@ -217,6 +262,11 @@ class SphinxRecognizer:
             if not repeated:
                 words.append(word)
         return words
+
+
+def _pcm(audio: np.ndarray) -> bytes:
+    """Float samples in [-1, 1] as the 16-bit little-endian PCM pocketsphinx reads."""
+    return np.clip(np.round(audio * 32767.0), -32768, 32767).astype("<i2").tobytes()
 
 
 def _decode(decoder: Any, pcm: bytes, partial: bool = False) -> str:

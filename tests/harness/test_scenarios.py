@@ -1,3 +1,4 @@
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -6,6 +7,7 @@ from typing import Any, Dict, List
 import pytest
 
 from harness.memory_runner import run_in_memory
+from harness.outcome import REAL_TIME, SIM_TIME
 from harness.report import passed, report
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
 from speech_event.config import SpeechEventConfig
@@ -81,7 +83,7 @@ MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"pu
         ({"voice": "robot"}, "s.toml: 'voice' = 'robot' is not allowed; allowed: tones, tts"),
         (
             {"config": {"speech_pause": 1}},
-            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers",
+            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period",
         ),
         ({"expect": {"published": [1]}}, "s.toml: [expect]: 'published' must be a list of strings"),
     ],
@@ -202,3 +204,75 @@ def test_a_failure_report_carries_the_hint_it_is_given(tmp_path: Path) -> None:
     text = report(scenario, run_in_memory(scenario), "sim-time replay drives /clock")
     assert text.splitlines()[-1] == "      note: sim-time replay drives /clock"
     assert report(scenario, run_in_memory(scenario)).splitlines()[-1].startswith("        t=")
+
+
+# -- [expect] partials and transcripts ------------------------------------------------------------
+
+
+def _expecting(partials: List[Any], transcripts: List[Any]) -> Any:
+    document = {**MINIMAL, "steps": [{"say": "go left"}]}
+    document["expect"] = {"published": ["go left"], "partials": partials, "transcripts": transcripts}
+    return parse_scenario(document, "s.toml", SpeechEventConfig(sample_rate=16000))
+
+
+@pytest.mark.parametrize(
+    "partials, transcripts, message",
+    [
+        (
+            ["go"],
+            [],
+            "s.toml: [expect]: 'partials' must be a list of tables such as { at = 0.75, text = \"go to\" }",
+        ),
+        ([{"at": 0.5}], [], "s.toml: [expect]: partials[0]: 'text' is required"),
+        (
+            [{"at": -1, "text": "go"}],
+            [],
+            "s.toml: [expect]: partials[0]: 'at' = -1.0 must be a number of seconds 0 or more and at most 3600",
+        ),
+        ([], [{"text": "go"}], "s.toml: [expect]: transcripts[0]: 'final' is required"),
+        (
+            [],
+            [{"text": "go", "final": "yes"}],
+            "s.toml: [expect]: transcripts[0]: 'final' = 'yes' must be of type bool",
+        ),
+        (
+            [],
+            [{"text": "go", "final": True, "stamp": 1.0}],
+            "s.toml: [expect]: transcripts[0]: unknown key 'stamp'; allowed keys: text, final, confidence, language, engine, first_block, last_block",
+        ),
+    ],
+)
+def test_a_bad_partial_or_transcript_expectation_is_refused_with_where_and_what_is_allowed(
+    partials: List[Any], transcripts: List[Any], message: str
+) -> None:
+    with pytest.raises(ScenarioError) as error:
+        _expecting(partials, transcripts)
+    assert str(error.value) == message
+
+
+def test_partials_are_checked_with_their_times_in_memory_by_their_texts_in_sim_time_not_in_real_time() -> (
+    None
+):
+    # "go left" in the tones voice at 16 kHz: blocks from 0.256 s, its last at 0.512 s.
+    right = _expecting(
+        [{"at": 0.756, "text": "go left"}],
+        [{"text": "go left", "final": False, "first_block": 0.256}, {"text": "go left", "final": True}],
+    )
+    late = _expecting(
+        [{"at": 0.9, "text": "go left"}],
+        [{"text": "go left", "final": False, "first_block": 0.3}, {"text": "go left", "final": True}],
+    )
+    wrong = _expecting([{"at": 0.756, "text": "go"}], [])
+    outcome = run_in_memory(right)
+    assert [(round(p.time, 3), p.text) for p in outcome.partials] == [(0.756, "go left")]
+    assert passed(right, outcome)
+    assert not passed(late, outcome)
+    assert "      -t=0.900 s  'go left'\n      +t=0.756 s  'go left'" in report(late, outcome)
+    assert (
+        "      -text='go left', final=False, first_block=0.300\n      +text='go left', final=False, first_block=0.256"
+        in report(late, outcome)
+    )
+    sim_time = dataclasses.replace(outcome, clock=SIM_TIME)
+    assert passed(late, sim_time)
+    assert not passed(wrong, sim_time)
+    assert passed(wrong, dataclasses.replace(outcome, clock=REAL_TIME))

@@ -53,7 +53,7 @@ class Rig:
         self.statistics = NodeStatistics()
         self.action = ListenAction(self.clock, lambda: None)
         self.store = store
-        self.publication = Publication(config, self.statistics, self.action, store)
+        self.publication = Publication(config, self.statistics, self.action, store, self.clock.now)
         self.goal = MemoryGoal(RecogniseSpeechGoal(wait=10.0), lambda goal: None)
         self.action.on_goal(self.goal)
 
@@ -68,7 +68,7 @@ class Rig:
     def conclude(self, outcome: RecognitionOutcome, number: int = 1) -> RecognitionJob:
         """Utterance ``number`` (0.5 s, started at 1.0 s) closed and was recognized: ``outcome``."""
         job = RecognitionJob(
-            number, 1.0, 1.5, np.zeros(8000, dtype=np.float32), SpyRecognizer(), "english", 0.5
+            number, 1.0, 1.5, 1.25, np.zeros(8000, dtype=np.float32), SpyRecognizer(), "english", 0.5
         )
         self.statistics.queued(job.seconds)
         self.action.utterance_closed(number, job.started_at, more_follows=False)
@@ -108,13 +108,13 @@ def _stored(file: str, transcript: str, recognition_time: float) -> StoredUttera
 
 def test_publish_before_start_publishes_nothing() -> None:
     rig = Rig()
-    rig.publication.publish("hello")
+    rig.publication.publish_error("hello", "english", "SpyRecognizer")
     assert rig.published == []
 
 
 def test_publish_after_start_publishes_the_text_as_it_is() -> None:
     rig = Rig().start()
-    rig.publication.publish(" Error: soundDetection is down ")
+    rig.publication.publish_error(" Error: soundDetection is down ", "english", "SpyRecognizer")
     assert rig.published == [" Error: soundDetection is down "]
 
 
