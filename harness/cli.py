@@ -121,22 +121,26 @@ def _demo(arguments: argparse.Namespace) -> int:
     return 0
 
 
-def open_demo_window(scenario: Scenario) -> "TranscriptWindow":
+def open_demo_window(scenario: Scenario, wall: Callable[[], float] = time.time) -> "TranscriptWindow":
     """The presentation window on the demo's in-memory bus, after the demo ran (on its fake clock)."""
     import tkinter
 
     from speech_event.gui import TranscriptWindow
 
-    bus, clock, started = InMemoryBus(), FakeClock(), time.time()
+    bus, clock, started = InMemoryBus(), FakeClock(), wall()
+    ran_until: List[float] = []  # the wall clock's offset once the demo ran
 
-    def time_of_day() -> float:  # the window shows the time of day; the scenario starts at 0
-        return started + clock.now()
+    def time_of_day() -> float:
+        """The scenario's time from now while it plays; after it, the wall clock: the fake clock
+        stops with the scenario, and lines typed later must not all show its last time."""
+        return started + clock.now() if not ran_until else wall() + ran_until[0]
 
     window = TranscriptWindow(
         tkinter.Tk(), bus, lambda name, _, request: bus.call(name, request), clock=time_of_day
     )
     run_in_memory(scenario, bus=bus, clock=clock)
     window.refresh()
+    ran_until.append(started + clock.now() - wall())
     return window
 
 
