@@ -51,6 +51,16 @@ from tests.helpers.application import APPLICATION
 from tests.ros.conftest import wait_for
 
 NOON = 12 * 3600.0
+# What python -m harness demo --gui plays.
+DEMO = Scenario(
+    name="demo",
+    source="demo",
+    config=SpeechEventConfig(),
+    steps=(Say("go to the kitchen"),),
+    expected=("go to the kitchen",),
+    voice="tones",
+    recognizer="fake",
+)
 
 
 def _screenshot(display: str, path: Path) -> np.ndarray:
@@ -167,16 +177,7 @@ def test_on_ros_the_window_shows_the_nodes_texts_and_calls_its_services(
 
 
 def test_the_demo_opens_the_window_on_its_in_memory_bus(display: str) -> None:
-    scenario = Scenario(
-        name="demo",
-        source="demo",
-        config=SpeechEventConfig(),
-        steps=(Say("go to the kitchen"),),
-        expected=("go to the kitchen",),
-        voice="tones",
-        recognizer="fake",
-    )
-    window = open_demo_window(scenario)
+    window = open_demo_window(DEMO)
     try:
         window.root.update()
         (line,) = window.lines()
@@ -277,16 +278,7 @@ def _seconds_of_day(stamp: str) -> int:
 
 def test_lines_typed_after_the_demo_ran_carry_the_time_they_were_typed(display: str) -> None:
     wall = [1000.0]
-    scenario = Scenario(
-        name="demo",
-        source="demo",
-        config=SpeechEventConfig(),
-        steps=(Say("go to the kitchen"),),
-        expected=("go to the kitchen",),
-        voice="tones",
-        recognizer="fake",
-    )
-    window = open_demo_window(scenario, wall=lambda: wall[0])
+    window = open_demo_window(DEMO, wall=lambda: wall[0])
     try:
         for typed_at, line in ((1010.0, "first"), (1030.0, "second")):
             wall[0] = typed_at
