@@ -25,7 +25,11 @@ else:
             ],
             package_data={
                 "harness": ["data/*.txt"],
-                "speech_event": ["definitions/msg/*.msg", "definitions/srv/*.srv", "definitions/action/*.action"],
+                "speech_event": [
+                    "definitions/msg/*.msg",
+                    "definitions/srv/*.srv",
+                    "definitions/action/*.action",
+                ],
             },
         )
     )
