@@ -1,7 +1,7 @@
 """One PASS/FAIL line per scenario; for a failure, a diff of expected versus observed."""
 
 import difflib
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from harness.outcome import MEMORY, REAL_TIME, Outcome, Published
 from harness.scenario import TRANSCRIPT_TIMES, Scenario
@@ -37,11 +37,9 @@ def _checks(scenario: Scenario, outcome: Outcome) -> List[Tuple[str, Sequence[st
             }
             for fields in scenario.expected_transcripts
         ]
-        observed = [_fields(message, fields) for message, fields in zip(outcome.transcripts, expected)]
+        observed = [_fields(message, fields.keys()) for message, fields in zip(outcome.transcripts, expected)]
         # Messages beyond those expected are shown with the required fields.
-        observed += [
-            _fields(message, {"text": 0, "final": 0}) for message in outcome.transcripts[len(expected) :]
-        ]
+        observed += [_fields(message, ("text", "final")) for message in outcome.transcripts[len(expected) :]]
         checks.append(
             ("transcripts", [_written(fields) for fields in expected], [_written(f) for f in observed])
         )
@@ -53,9 +51,9 @@ def _partial(time: float, text: str, timed: bool) -> str:
     return f"t={time:.3f} s  {text!r}" if timed else repr(text)
 
 
-def _fields(message: TranscriptMessage, like: Dict[str, object]) -> Dict[str, object]:
-    """The fields of ``message`` that ``like`` names."""
-    return {key: getattr(message, key) for key in like}
+def _fields(message: TranscriptMessage, keys: Iterable[str]) -> Dict[str, object]:
+    """The fields of ``message`` named ``keys``."""
+    return {key: getattr(message, key) for key in keys}
 
 
 def _written(fields: Dict[str, object]) -> str:

@@ -45,7 +45,7 @@ from speech_event.partials import PartialCounts, PartialFeed, PartialRules
 from speech_event.pipeline.assembly import UtteranceAssembler
 from speech_event.pipeline.publication import Publication, TextOrigin
 from speech_event.pipeline.recognition import Recognition
-from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
@@ -260,7 +260,7 @@ class SpeechEventNode:
     def _maybe_speculate(self) -> None:
         """Under the lock: speculate on the utterance being collected if its gap has passed and the
         rules allow it now."""
-        idle = self._running is None and self._queue.waiting == 0
+        idle = self._worker_idle()
         collecting = self._enabled and self._assembler.pending_samples > 0 and self._turn.gap_passed()
         if not (collecting and self._speculation.may_start(self._recognizer, idle)):
             return
@@ -269,13 +269,23 @@ class SpeechEventNode:
         speculation = self._speculation.start(audio.size, self._recognizer, self._grammar)
         speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
 
+    def _worker_idle(self) -> bool:
+        """Under the lock: no closed utterance is being recognized or waits for it."""
+        return self._running is None and self._queue.waiting == 0
+
+    def _recognize_unless_cancelled(self, run: Speculation, audio: Audio) -> Optional[RecognitionOutcome]:
+        """On the worker: ``run``'s recognition of ``audio``; None when it was cancelled before."""
+        with self._lock:
+            if run.cancelled:
+                return None
+            run.running = True
+        return self._recognition(audio, run.recognizer, run.grammar)
+
     def _speculate(self, speculation: Speculation, audio: Audio) -> None:
         """An executor job: transcribe the utterance so far; publish it only if it closed as it is."""
-        with self._lock:
-            if speculation.cancelled:
-                return
-            speculation.running = True
-        outcome = self._recognition(audio, speculation.recognizer, speculation.grammar)
+        outcome = self._recognize_unless_cancelled(speculation, audio)
+        if outcome is None:
+            return
         partial: Optional[Transcript] = None
         with self._lock:
             job = self._speculation.finished(speculation, outcome)
@@ -295,7 +305,7 @@ class SpeechEventNode:
     def _maybe_partial(self) -> None:
         """Under the lock: ask for the text of the utterance so far if a partial is due and the
         worker is idle (no closed utterance, no speculation)."""
-        idle = self._running is None and self._queue.waiting == 0 and self._speculation.current is None
+        idle = self._worker_idle() and self._speculation.current is None
         pending, now = self._assembler.pending_samples, self._clock.now()
         if not (self._enabled and self._partials.may_start(self._recognizer, idle, pending, now)):
             return
@@ -310,11 +320,9 @@ class SpeechEventNode:
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """An executor job: a Stoppable engine's text of the utterance so far."""
-        with self._lock:
-            if run.cancelled:
-                return
-            run.running = True
-        outcome = self._recognition(audio, run.recognizer, run.grammar)
+        outcome = self._recognize_unless_cancelled(run, audio)
+        if outcome is None:
+            return
         with self._lock:
             partial = self._partials.finished(run, outcome)
             self._maybe_partial()  # more audio came meanwhile

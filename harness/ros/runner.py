@@ -43,7 +43,7 @@ from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
 from harness.timeline import SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
-from speech_event.adapters.ros import generated_class, master_answers
+from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros
 from speech_event.config import format_config
 from speech_event.interfaces.action import ACTION_NAME
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
@@ -158,18 +158,7 @@ class RosReplay:
         self._outcome.partials.append(Published(self._scenario_time(), message.data))
 
     def _on_transcript(self, message: Any) -> None:
-        self._outcome.transcripts.append(
-            TranscriptMessage(
-                stamp=message.header.stamp.to_sec(),
-                text=message.text,
-                final=message.final,
-                confidence=message.confidence,
-                language=message.language,
-                engine=message.engine,
-                first_block=message.first_block.to_sec(),
-                last_block=message.last_block.to_sec(),
-            )
-        )
+        self._outcome.transcripts.append(transcript_from_ros(message))
 
     # -- the walk's runner (harness/player.py): the clock, the services and the action ----------
 

@@ -93,6 +93,20 @@ _ROS_TYPES: Dict[type, type] = {
 }
 
 
+def transcript_from_ros(message: Any) -> messages.TranscriptMessage:
+    """A speech_event/Transcript as it came off ROS, as the plain message (_to_ros's inverse)."""
+    return messages.TranscriptMessage(
+        stamp=message.header.stamp.to_sec(),
+        text=message.text,
+        final=message.final,
+        confidence=message.confidence,
+        language=message.language,
+        engine=message.engine,
+        first_block=message.first_block.to_sec(),
+        last_block=message.last_block.to_sec(),
+    )
+
+
 def _from_ros(ours: type, message: object) -> Any:
     return ours(**{field.name: getattr(message, field.name) for field in dataclasses.fields(ours)})
 

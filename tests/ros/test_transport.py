@@ -12,8 +12,8 @@ import numpy as np
 import rosgraph
 
 from speech_event import SIGNAL_TOPIC
-from speech_event.adapters.ros import RosClock, RosTransport
-from speech_event.messages import Float32MultiArray, String
+from speech_event.adapters.ros import RosClock, RosTransport, _to_ros, transcript_from_ros
+from speech_event.messages import Float32MultiArray, String, TranscriptMessage
 from speech_event.ports import PublisherStatus
 from tests.helpers.paths import ROOT
 from tests.ros.conftest import wait_for
@@ -103,3 +103,12 @@ def test_every_script_names_the_system_python_so_a_pyenv_python3_cannot_break_ro
     for script in sorted((ROOT / "scripts").iterdir()):
         assert script.read_text().startswith("#!/usr/bin/python3\n"), script
         assert os.access(script, os.X_OK), script
+
+
+def test_a_transcript_message_crosses_to_ros_and_back_field_by_field() -> None:
+    message = TranscriptMessage(
+        12.5, "go to the kitchen", True, 0.75, "kinyarwanda", "NemoRecognizer", 10.25, 11.5
+    )
+    ros = _to_ros(message)
+    assert type(ros).__name__ == "Transcript" and ros.header.stamp.to_sec() == 12.5  # type: ignore[attr-defined]
+    assert transcript_from_ros(ros) == message
