@@ -1,4 +1,4 @@
-"""fp32 against int8 (python -m bench.int8; section (e) of python -m bench.asr).
+"""fp32 against int8 (python -m bench.int8 [NAME ...]; section (e) of python -m bench.asr).
 
 For each model directory bench/family_models.py wrote (SPEECH_EVENT_FAMILY_MODELS=DIR: the
 conformer-transducer large, the Parakeet-TDT 0.6B shape, Whisper base and small, random weights),
@@ -8,11 +8,15 @@ that engine's alone: our engine's real-time factor on 10 s of speech (the best o
 warm-up) and its peak resident memory, and the same directory through onnx-asr (NeMo directories:
 onnx-asr reads ours as they are; Whisper in optimum's layout, which bench/whisper_optimum_parity.py
 writes, as its "whisper" model; it has no reader for export-whisper's layout), its RTF and ours
-divided by it. Last, how often int8 says what fp32 says on the command utterances.
+divided by it. The two run in turns, ROUNDS processes each (a shared machine's load changes from
+minute to minute: in turns it weighs on both alike), and each figure is the median of its rounds;
+the ratio's range is that of the rounds' own ratios. Last, how often int8 says what fp32 says on
+the command utterances.
 """
 
 import json
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -33,6 +37,7 @@ from speech_event.recognizers.whisper.optimum_layout import is_optimum_directory
 
 SECONDS = 10
 RUNS = 3
+ROUNDS = 5
 
 
 def _speech() -> np.ndarray:
@@ -110,26 +115,43 @@ def _agreement(directory: Path) -> str:
 
 
 def _line(name: str, quantization: str, cores: int, directory: Path) -> str:
-    ours = _run("ours", directory, quantization, cores)
-    theirs = _run("onnx-asr", directory, quantization, cores)
-    assert ours is not None
-    figures = f"RTF {ours['rtf']:.3f}, peak {ours['peak_mib']:.0f} MiB"
-    if theirs is None:
+    ours: List[Dict[str, float]] = []
+    theirs: List[Dict[str, float]] = []
+    readable = True  # by onnx-asr
+    for _ in range(ROUNDS):
+        mine = _run("ours", directory, quantization, cores)
+        assert mine is not None
+        ours.append(mine)
+        other = _run("onnx-asr", directory, quantization, cores) if readable else None
+        readable = other is not None
+        if other is not None:
+            theirs.append(other)
+    figures = f"RTF {_median(ours, 'rtf'):.3f}, peak {_median(ours, 'peak_mib'):.0f} MiB"
+    if not theirs:
         compared = "onnx-asr: no reader for this layout"
     else:
+        ratios = [mine["rtf"] / other["rtf"] for mine, other in zip(ours, theirs)]
         compared = (
-            f"onnx-asr RTF {theirs['rtf']:.3f}, peak {theirs['peak_mib']:.0f} MiB; "
-            f"ours / onnx-asr {ours['rtf'] / theirs['rtf']:.2f}"
+            f"onnx-asr RTF {_median(theirs, 'rtf'):.3f}, peak {_median(theirs, 'peak_mib'):.0f} MiB; "
+            f"ours / onnx-asr {_median(ours, 'rtf') / _median(theirs, 'rtf'):.2f} "
+            f"(rounds {min(ratios):.2f} to {max(ratios):.2f})"
         )
     return f"(e) {name:18s} {quantization:4s} {cores} core{'s' if cores > 1 else ' '}: {figures}; {compared}"
 
 
-def figures() -> None:
+def _median(rounds: List[Dict[str, float]], figure: str) -> float:
+    return statistics.median(round_[figure] for round_ in rounds)
+
+
+def figures(names: List[str]) -> None:
+    """Every model directory bench/family_models.py wrote, or those ``names`` name."""
     where = os.environ.get("SPEECH_EVENT_FAMILY_MODELS")
     if not where:
         print("(e) set SPEECH_EVENT_FAMILY_MODELS to the directory bench/family_models.py wrote")
         return
-    directories: List[Path] = sorted(path for path in Path(where).iterdir() if path.is_dir())
+    directories: List[Path] = sorted(
+        path for path in Path(where).iterdir() if path.is_dir() and (not names or path.name in names)
+    )
     for directory in directories:
         if not any(int8_file(directory, path.name) for path in directory.glob("*.onnx")):
             quantize_directory(directory)
@@ -143,4 +165,4 @@ if __name__ == "__main__":
     if sys.argv[1:2] == ["--one"]:
         one(sys.argv[2], Path(sys.argv[3]), sys.argv[4])
         sys.exit(0)
-    figures()
+    figures(sys.argv[1:])

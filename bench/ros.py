@@ -9,12 +9,9 @@ import contextlib
 import io
 import os
 import statistics
-import sys
-import tempfile
 import time
 import xmlrpc.client
-from pathlib import Path
-from typing import Any, Callable, Dict, List
+from typing import Any, Callable, List
 
 import numpy as np
 import rosgraph
@@ -22,14 +19,14 @@ import rospy
 from rospy.numpy_msg import numpy_msg
 from std_msgs import msg as std_msgs
 
+from bench.ros_graph import NODE_SCRIPT, RosGraph, ros_graph
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
-from harness.processes import Processes, free_port
+from harness.processes import ReplayError, wait_until
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.adapters.ros import RosTransport
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
@@ -37,16 +34,6 @@ from speech_event.recognizers.tones import ToneRecognizer
 
 BLOCK = 4096
 RATE = 48000
-# The node of this tree, as the ROS replay starts it.
-NODE_SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "speech_event_application.py"
-
-
-def _wait(condition: Callable[[], bool], timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise TimeoutError("the benchmark's ROS graph did not come up")
-        time.sleep(0.002)
 
 
 def per_block_cost(blocks: int = 5000) -> None:
@@ -83,24 +70,8 @@ def _received(node_uri: str) -> int:
 
 
 def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
-    work = Path(tempfile.mkdtemp(prefix="speech_event_bench_"))
-    port = free_port()
-    environment = dict(
-        os.environ,
-        ROS_MASTER_URI=f"http://127.0.0.1:{port}",
-        ROS_IP="127.0.0.1",
-        ROS_HOME=str(work),
-        PYTHONPATH=str(NODE_SCRIPT.parents[1]),  # the node of this tree, not an installed copy
-    )
-    os.environ.update(environment)
-    processes = Processes(environment, work)
-    try:
-        processes.start("roscore", ["roscore", "-p", str(port)])
-        master = rosgraph.Master("/bench")
-        _wait(lambda: _answers(master))
+    with ros_graph("speech_event_bench_") as graph:
         config = SpeechEventConfig()
-        rospy.init_node("soundDetection", disable_signals=True)
-        transport = RosTransport()
         arrivals: List[float] = []
         texts: List[str] = []
 
@@ -108,32 +79,22 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
             arrivals.append(time.perf_counter())
             texts.append(message.data)  # type: ignore[attr-defined]
 
-        transport.subscribe(TEXT_TOPIC, String, on_text)
-        signal = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
+        graph.transport.subscribe(TEXT_TOPIC, String, on_text)
         spoken = speak_tones("go to the kitchen", RATE)
         padded = np.zeros(-(-spoken.size // BLOCK) * BLOCK, dtype=np.float32)
         padded[: spoken.size] = spoken
         runs = (("without speculation", "speculative_recognition false\n"), ("with speculation", ""))
         for label, settings in runs:
-            (work / "config.ini").write_text(settings)
-            node = processes.start(
-                "node",
-                [sys.executable, str(NODE_SCRIPT), "-c", str(work / "config.ini"), "--recognizer", "fake"],
-            )
-            _wait(
-                lambda: (
-                    signal.connections() > 0 and transport._subscribers[TEXT_TOPIC].get_num_connections() > 0
-                )
-            )
+            node = graph.start_node(settings, "fake", graph.subscribed(TEXT_TOPIC))
             latencies: List[float] = []
             texts.clear()
             for _ in range(utterances):
                 count = len(texts)
                 for block in padded.reshape(-1, BLOCK):
                     time.sleep(BLOCK / RATE)  # as soundDetection: a block when it has been recorded
-                    signal.publish(Float32MultiArray(data=block))
+                    graph.signal.publish(Float32MultiArray(data=block))
                     last_block = time.perf_counter()
-                _wait(_more_than(texts, count), timeout=10)
+                wait_until(_more_than(texts, count), "the text", 10)
                 latencies.append(arrivals[-1] - last_block - config.speech_pause_period)
             assert texts == ["go to the kitchen"] * utterances, texts
             print(
@@ -143,9 +104,8 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
                 "(target <= 20 ms)"
             )
             if settings:  # the last node, with speculation (the default), stays for what follows
-                processes.stop(node)
-                _wait(lambda: signal.connections() == 0)
-        node_uri = str(master.lookupNode("/speechEvent"))
+                graph.stop_node(node)
+        node_uri = str(rosgraph.Master("/bench").lookupNode("/speechEvent"))
 
         service_round_trips()
 
@@ -153,20 +113,17 @@ def on_roscore(utterances: int = 5, burst: int = 1000) -> None:
         quiet = noise(BLOCK * burst, -40.0, np.random.default_rng(1)).reshape(burst, BLOCK)
         start = time.perf_counter()
         for block in quiet:
-            signal.publish(Float32MultiArray(data=block))
+            graph.signal.publish(Float32MultiArray(data=block))
         sent = time.perf_counter() - start
-        with contextlib.suppress(TimeoutError):  # what did not arrive in 30 s is counted as lost
-            _wait(lambda: _received(node_uri) - before >= burst, timeout=30)
+        with contextlib.suppress(ReplayError):  # what did not arrive in 30 s is counted as lost
+            wait_until(lambda: _received(node_uri) - before >= burst, "the burst", 30)
         received = _received(node_uri) - before
         print(
             f"roscore: burst of {burst} blocks published in {sent * 1e3:.0f} ms: "
             f"{received} received by the node, {burst - received} lost (target 0)"
         )
-        processes.stop(node)
-        engines_on_roscore(environment)
-    finally:
-        rospy.signal_shutdown("bench done")
-        processes.stop_all()
+        graph.stop_node(node)
+        engines_on_roscore(graph)
 
 
 def service_round_trips(calls: int = 200) -> None:
@@ -190,13 +147,12 @@ def service_round_trips(calls: int = 200) -> None:
         )
 
 
-def engines_on_roscore(environment: Dict[str, str], runs: int = 2) -> None:
+def engines_on_roscore(graph: RosGraph, runs: int = 2) -> None:
     """bench/latency.py's figure (a) on a real roscore: the node as its own process with each
     engine, utterances of 1 to 10 s published at once, last block to text minus the pause."""
     from bench.latency import LENGTHS, _speech
 
-    work = Path(tempfile.mkdtemp(prefix="speech_event_bench_engines_"))
-    tones = build_tones_model(work / "tones")
+    tones = build_tones_model(graph.work / "tones")
     grammar = NODE_SCRIPT.parents[1] / "harness" / "data" / "robot_commands.txt"
     engines = [
         ("fake (tones)", "fake", "", "tones"),
@@ -207,67 +163,39 @@ def engines_on_roscore(environment: Dict[str, str], runs: int = 2) -> None:
     large = os.environ.get("SPEECH_EVENT_LARGE_MODEL")  # see bench/latency.py
     if large:
         engines.append(("large conformer (119 M, random weights)", "nemo", f"en_model_path {large}\n", "tts"))
-    transport = RosTransport()
     arrivals: List[float] = []
-    transport.subscribe(TEXT_TOPIC, String, lambda message: arrivals.append(time.perf_counter()))
-    signal = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
-    processes = Processes(environment, work)
+    graph.transport.subscribe(TEXT_TOPIC, String, lambda message: arrivals.append(time.perf_counter()))
     pause = SpeechEventConfig().speech_pause_period
-    try:
-        for name, recognizer, settings, voice in engines:
-            for speculating in (False, True):
-                (work / "node.ini").write_text(
-                    settings + "publish_unrecognized true\nmax_utterance_length 30\n"
-                    f"speculative_recognition {str(speculating).lower()}\n"
+    for name, recognizer, settings, voice in engines:
+        for speculating in (False, True):
+            node = graph.start_node(
+                settings + "publish_unrecognized true\nmax_utterance_length 30\n"
+                f"speculative_recognition {str(speculating).lower()}\n",
+                recognizer,
+                graph.subscribed(TEXT_TOPIC),
+            )
+            for seconds in LENGTHS:
+                audio = _speech(voice, seconds)
+                latencies = []
+                for _ in range(runs):
+                    count = len(arrivals)
+                    for start in range(0, audio.size, BLOCK):
+                        graph.signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+                    last_block = time.perf_counter()
+                    wait_until(_more_than(arrivals, count), "the text", 60)
+                    latencies.append(arrivals[-1] - last_block - pause)
+                    time.sleep(0.2)
+                print(
+                    f"roscore: {name:34s} {seconds:4.0f} s, {'with' if speculating else 'without'} "
+                    f"speculation: median {1000 * statistics.median(latencies):6.0f} ms, "
+                    f"max {1000 * max(latencies):6.0f} ms",
+                    flush=True,
                 )
-                command = [
-                    sys.executable,
-                    str(NODE_SCRIPT),
-                    "-c",
-                    str(work / "node.ini"),
-                    "--recognizer",
-                    recognizer,
-                ]
-                node = processes.start("node", command)
-                _wait(
-                    lambda: (
-                        signal.connections() > 0
-                        and transport._subscribers[TEXT_TOPIC].get_num_connections() > 0
-                    )
-                )
-                for seconds in LENGTHS:
-                    audio = _speech(voice, seconds)
-                    latencies = []
-                    for _ in range(runs):
-                        count = len(arrivals)
-                        for start in range(0, audio.size, BLOCK):
-                            signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
-                        last_block = time.perf_counter()
-                        _wait(_more_than(arrivals, count), timeout=60)
-                        latencies.append(arrivals[-1] - last_block - pause)
-                        time.sleep(0.2)
-                    print(
-                        f"roscore: {name:34s} {seconds:4.0f} s, {'with' if speculating else 'without'} "
-                        f"speculation: median {1000 * statistics.median(latencies):6.0f} ms, "
-                        f"max {1000 * max(latencies):6.0f} ms",
-                        flush=True,
-                    )
-                processes.stop(node)
-                _wait(lambda: signal.connections() == 0)
-    finally:
-        processes.stop_all()
+            graph.stop_node(node)
 
 
 def _more_than(texts: List[Any], count: int) -> Callable[[], bool]:
     return lambda: len(texts) > count
-
-
-def _answers(master: rosgraph.Master) -> bool:
-    try:
-        master.getPid()
-        return True
-    except Exception:
-        return False
 
 
 if __name__ == "__main__":

@@ -484,6 +484,8 @@ class SpeechEventNode:
                 utterances=self._utterances,
                 queued_seconds=self._queue.seconds,
                 dropped=self._queue.dropped,
+                partials_published=self.partials.published,
+                partial_seconds=self.partials.worker_seconds,
             )
 
 

@@ -19,6 +19,7 @@ STATUS_NAME = "speechEvent"
 # Why an utterance was not transcribed: the node was disabled, and the speech screen's reasons.
 DISCARDED_WHILE_DISABLED = "disabled"
 DISCARDED_BACKLOG = "backlog"  # dropped unrecognized to keep within max_backlog
+PARTIAL_WORKER_KEY = "partial results worker time (s)"
 
 
 @dataclass
@@ -49,6 +50,8 @@ class NodeState:
     utterances: int = 0  # closed so far
     queued_seconds: float = 0.0  # of speech waiting for recognition
     dropped: int = 0  # utterances dropped unrecognized (max_backlog)
+    partials_published: int = 0  # on /speechEvent/partial
+    partial_seconds: float = 0.0  # of engine time the partial results took
 
 
 class NodeStatistics:
@@ -117,6 +120,8 @@ class NodeStatistics:
                 KeyValue("utterances waiting for recognition", str(counts.waiting)),
                 KeyValue("queued audio (s)", f"{counts.waiting_audio_seconds:.3f}"),
                 KeyValue("recognitions timed out", str(state.timed_out)),
+                KeyValue("partial results published", str(state.partials_published)),
+                KeyValue(PARTIAL_WORKER_KEY, f"{state.partial_seconds:.3f}"),
             ]
             backlog = counts.waiting - 1
         level, message = _level(state, backlog)

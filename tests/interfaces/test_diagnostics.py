@@ -4,9 +4,11 @@ import itertools
 
 import numpy as np
 
+from fixtures.audio import speak_tones
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.services import SET_ENABLED_SERVICE
 from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, SetEnabledRequest
+from speech_event.recognizers.tones import ToneRecognizer
 from tests.helpers.fakes import SpyRecognizer
 from tests.helpers.rig import Rig
 
@@ -62,6 +64,8 @@ def test_the_status_counts_what_the_node_did_and_times_recognition() -> None:
         "utterances waiting for recognition": "0",
         "queued audio (s)": "0.000",
         "recognitions timed out": "0",
+        "partial results published": "0",
+        "partial results worker time (s)": "0.000",
     }
 
 
@@ -82,3 +86,13 @@ def test_sound_detection_down_is_an_error_and_a_backlog_a_warning() -> None:
     ]
     assert _values(rig.diagnostics[-1])["queued audio (s)"] == "0.768"  # 3 x 4096 samples
     assert _values(rig.diagnostics[0])["last recognition time (s)"] == "none yet"
+
+
+def test_the_status_counts_partial_results_and_the_engine_time_they_took() -> None:
+    ticks = itertools.count(0.0, 0.125)  # each run, partial or not, takes 0.125 s on this stopwatch
+    rig = Rig(CONFIG, ToneRecognizer(), stopwatch=lambda: next(ticks))
+    rig.speak(speak_tones("go to the kitchen", 16000))  # partials at 0.756 and 1.256 s (test_partials)
+    rig.clock.advance_to(4.0)
+    values = _values(rig.diagnostics[-1])
+    assert (values["partial results published"], values["partial results worker time (s)"]) == ("2", "0.250")
+    assert values["texts published"] == "1"
