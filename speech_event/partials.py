@@ -18,7 +18,7 @@ A speculation (speech_event/speculation.py) that ends with more audio to come, o
 pause to end, also gives the text so far: it is published as a partial too, when it is new.
 
 A partial never publishes on /speechEvent/text and never ends a turn: final texts are exactly those
-of the node without partials, at the same times (tests/test_partials.py).
+of the node without partials, at the same times (tests/test_partials.py, test_every_scenario.py).
 """
 
 from dataclasses import dataclass

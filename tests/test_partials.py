@@ -5,7 +5,6 @@ The node runs on the fake clock with the simulated worker (each recognition, par
 feeds included, takes ``recognition_seconds`` of clock time)."""
 
 import dataclasses
-from pathlib import Path
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -14,8 +13,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
-from harness.memory_runner import run_in_memory
-from harness.scenario import load_scenario
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError
@@ -25,7 +22,6 @@ from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.topics import PARTIAL_TOPIC, TRANSCRIPT_TOPIC
 from tests.helpers.rig import Rig
-from tests.helpers.scenario_files import SCENARIOS
 
 RATE = 16000
 BLOCK = 4096 / RATE  # Rig.speak: one block every 0.256 s, the first at 0.256 s
@@ -122,21 +118,6 @@ def test_with_partials_the_same_final_texts_are_published_at_the_same_times(
 
     without = _run(plain, make(), timeline, recognition_seconds).published
     assert _run(with_partials, make(), timeline, recognition_seconds).published == without
-
-
-@pytest.mark.parametrize("recognition_seconds", [0.0, 1.0])
-@pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
-def test_every_scenario_publishes_the_same_with_and_without_partials(
-    path: Path, recognition_seconds: float
-) -> None:
-    scenario = load_scenario(str(path), SpeechEventConfig())
-    assert scenario.config.partial_period == 0.5  # the default
-    off = dataclasses.replace(scenario, config=dataclasses.replace(scenario.config, partial_period=0.0))
-    plain = run_in_memory(off, recognition_seconds)
-    with_partials = run_in_memory(scenario, recognition_seconds)
-    assert with_partials.published == plain.published
-    assert with_partials.results == plain.results
-    assert with_partials.responses == plain.responses
 
 
 def test_the_text_so_far_comes_every_period_and_only_when_it_changed() -> None:

@@ -6,7 +6,6 @@ too): once with speculative_recognition false, once true.
 """
 
 import dataclasses
-from pathlib import Path
 from typing import List, Tuple
 
 import numpy as np
@@ -15,10 +14,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
-from harness.memory_runner import run_in_memory
-from harness.outcome import Outcome, Published
-from harness.scenario import load_scenario
-from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
@@ -26,7 +21,6 @@ from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.speculation import complete_answers, is_complete
 from tests.helpers.rig import Rig
-from tests.helpers.scenario_files import SCENARIOS
 
 RATE = 16000
 PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)
@@ -136,35 +130,6 @@ def test_a_block_after_the_gap_cancels_the_speculation_and_the_worker_is_free_at
     rig.clock.advance(5.0)
     assert recognizer.calls == 1  # the second speculation, used for the closed utterance
     assert (rig.node.speculations.started, rig.node.speculations.used) == (2, 1)
-
-
-def _errors(outcome: Outcome) -> List[Tuple[float, str]]:
-    return [(m.time, m.text) for m in outcome.published if m.text == SOUND_DETECTION_DOWN]
-
-
-def _transcripts(outcome: Outcome) -> List[Published]:
-    return [m for m in outcome.published if m.text != SOUND_DETECTION_DOWN]
-
-
-@pytest.mark.parametrize("recognition_seconds", [0.0, 1.0])
-@pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
-def test_every_scenario_publishes_the_same_with_and_without_speculation(
-    path: Path, recognition_seconds: float
-) -> None:
-    scenario = load_scenario(str(path), SpeechEventConfig())
-    without = dataclasses.replace(
-        scenario, config=dataclasses.replace(scenario.config, speculative_recognition=False)
-    )
-    assert scenario.config.speculative_recognition  # the default
-    plain = run_in_memory(without, recognition_seconds)
-    speculating = run_in_memory(scenario, recognition_seconds)
-    # The health checks' errors come at their times either way; transcripts come the same, in the
-    # same order, each no later (so they may come before an error they used to follow).
-    assert _errors(speculating) == _errors(plain)
-    assert [m.text for m in _transcripts(speculating)] == [m.text for m in _transcripts(plain)]
-    assert all(a.time <= b.time + 1e-9 for a, b in zip(_transcripts(speculating), _transcripts(plain)))
-    assert [r.text for r in speculating.results] == [r.text for r in plain.results]
-    assert speculating.responses == plain.responses
 
 
 def _tones_published(config: SpeechEventConfig, said: List[Tuple[float, str]]) -> List[Tuple[float, str]]:

@@ -84,9 +84,11 @@ def transducer_forward(
             if 0 < d <= t:
                 into[1:] = np.logaddexp(into[1:], alpha[t - d, :-1] + weights[t - d])
         if 0 in token_moves:
-            staying = token_moves[0][t]
-            for u in range(1, positions):
-                into[u] = np.logaddexp(into[u], into[u - 1] + staying[u - 1])
+            # into[u] = logaddexp(into[u], into[u - 1] + staying[u - 1]) upwards in u is, unrolled,
+            # the log-sum over j <= u of into[j] plus the staying moves from j to u: a running
+            # log-sum-exp over prefix sums, in numpy, not a Python step per u.
+            prefix = np.concatenate(([0.0], np.cumsum(token_moves[0][t])))
+            into = prefix + np.logaddexp.accumulate(into - prefix)
         alpha[t] = into
     if past_end:
         endings = [
