@@ -248,4 +248,4 @@ if __name__ == "__main__":
     family_models()
     from bench.int8 import figures  # here: bench/int8.py imports this module
 
-    figures()
+    figures([])
