@@ -42,8 +42,9 @@ def test_int8_asked_where_there_is_none_says_how_to_get_it(tmp_path: Path) -> No
     )
 
 
-def test_sessions_run_without_onnxruntimes_memory_arena() -> None:
-    # the arena would keep each run's peak buffers for the process's life (bench/int8.py: the large
-    # conformer's int8 peak 561 MiB with it, 479 without, as fast)
+def test_sessions_run_without_a_memory_pattern_but_with_the_arena() -> None:
+    # the pattern keeps the largest utterance's plan for the process's life; the arena makes runs
+    # fast (speech_event/recognizers/onnx/session.py)
     session = open_session(whisper_tones_model_directory() / "encoder.onnx", ["CPUExecutionProvider"], "")
-    assert session.get_session_options().enable_cpu_mem_arena is False
+    options = session.get_session_options()
+    assert (options.enable_mem_pattern, options.enable_cpu_mem_arena) == (False, True)

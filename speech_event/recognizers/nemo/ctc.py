@@ -20,7 +20,7 @@ def ctc_greedy(logits: np.ndarray, blank: int) -> Hypothesis:
     for frame in logits:
         log_probabilities = log_softmax(frame)
         token = int(np.argmax(log_probabilities))
-        found.score += float(log_probabilities[token])
+        found.add(float(log_probabilities[token]))
         if token != blank and token != previous:
             found.tokens.append(token)
         previous = token

@@ -49,6 +49,9 @@ def _check(path: Path, kind: str, found: Sequence[onnxruntime.NodeArg], expected
     check_tensors(path, kind, found, expected, "a NeMo export")
 
 
+_ONE = np.ones(1, dtype=np.int32)  # a target_length of one token
+
+
 def _audio_inputs(features: np.ndarray) -> Dict[str, np.ndarray]:
     """The encoder's (or CTC model's) inputs for one utterance's features [features, T]."""
     return {
@@ -87,7 +90,8 @@ class TransducerModel:
             _audio_inputs(features),
             run,
         )
-        return np.asarray(outputs[0, :, : int(lengths[0])].T)
+        # Contiguous, so that each frame goes to the decoder-joint without a copy of its own.
+        return np.ascontiguousarray(outputs[0, :, : int(lengths[0])].T)
 
     def initial_state(self) -> LstmState:
         h, c = (np.zeros((int(shape[0]), 1, int(shape[2])), dtype=np.float32) for shape in self._state_shapes)
@@ -100,9 +104,22 @@ class TransducerModel:
         state: LstmState,
         run: Optional[onnxruntime.RunOptions] = None,
     ) -> Tuple[np.ndarray, LstmState]:
-        """The logits at ``frame`` [D] after ``last_token``, and the state after consuming it."""
-        logits, after = self.joint(frame[None], [last_token], state, run)
-        return logits.reshape(-1), after
+        """The logits at ``frame`` [D] after ``last_token``, and the state after consuming it.
+
+        Greedy decoding's hot loop (a call per frame and per token): the inputs are built directly,
+        without ``joint``'s batching copies."""
+        logits, h, c = self._decoder_joint.run(
+            ["outputs", "output_states_1", "output_states_2"],
+            {
+                "encoder_outputs": frame.reshape(1, -1, 1),
+                "targets": np.array([[last_token]], dtype=np.int32),
+                "target_length": _ONE,
+                "input_states_1": state[0],
+                "input_states_2": state[1],
+            },
+            run,
+        )
+        return np.asarray(logits).reshape(-1), (h, c)
 
     def joint(
         self,

@@ -16,8 +16,9 @@ import numpy as np
 import onnxruntime
 
 from speech_event.recognizers.nemo.model import LstmState, TransducerModel
-from speech_event.recognizers.nemo.rnnt import log_softmax_rows, rnnt_forward
+from speech_event.recognizers.nemo.rnnt import rnnt_forward
 from speech_event.recognizers.nemo.tdt import tdt_forward
+from speech_event.recognizers.onnx.hypothesis import log_softmax
 
 # Decoder-joint rows (trie nodes x frames) per call: bounds the memory of one call.
 MAX_ROWS = 4096
@@ -120,11 +121,11 @@ def _trie_log_probabilities(
             )
             split = logits.shape[-1] - duration_count
             for i, prefix in enumerate(chunk):
-                token_lp = log_softmax_rows(logits[i, :, :split])
+                token_lp = log_softmax(logits[i, :, :split])
                 nodes[prefix] = _Node(
                     blank=token_lp[:, blank],
                     next_tokens={token: token_lp[:, token] for token in children[prefix]},
-                    durations=log_softmax_rows(logits[i, :, split:]) if duration_count else token_lp[:, :0],
+                    durations=log_softmax(logits[i, :, split:]) if duration_count else token_lp[:, :0],
                 )
                 next_states[prefix] = (after[0][:, i : i + 1], after[1][:, i : i + 1])
         states = next_states

@@ -13,7 +13,7 @@ from typing import Callable, Dict, Sequence, Tuple, TypeVar
 
 import numpy as np
 
-from speech_event.recognizers.onnx.hypothesis import Hypothesis
+from speech_event.recognizers.onnx.hypothesis import Hypothesis, log_softmax
 
 State = TypeVar("State")
 # (encoder frame [D], last token, state) -> (logits, state after that token)
@@ -35,15 +35,6 @@ def rnnt_greedy(
             found.emit(token, logits)
             last, state = token, next_state
     return found
-
-
-def log_softmax_rows(logits: np.ndarray) -> np.ndarray:
-    """log(softmax) over the last axis of any array, as ``log_softmax`` does for one row (float64,
-    shifted by each row's maximum): a lattice's rows at once, not a Python call per (t, u)."""
-    values = np.asarray(logits, dtype=np.float64)
-    shifted = values - values.max(axis=-1, keepdims=True)
-    result: np.ndarray = shifted - np.log(np.exp(shifted).sum(axis=-1, keepdims=True))
-    return result
 
 
 def blank_and_token_log_probabilities(
@@ -130,4 +121,4 @@ def rnnt_log_likelihood(lattice: np.ndarray, tokens: Sequence[int], blank: int) 
     logaddexp(alpha(t-1, u) + blank(t-1, u), alpha(t, u-1) + token(t, u-1)); the result is
     alpha(T'-1, U) + blank(T'-1, U), -inf with no frames.
     """
-    return rnnt_forward(*blank_and_token_log_probabilities(log_softmax_rows(lattice), tokens, blank))
+    return rnnt_forward(*blank_and_token_log_probabilities(log_softmax(lattice), tokens, blank))

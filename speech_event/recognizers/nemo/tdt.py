@@ -17,10 +17,9 @@ from speech_event.recognizers.nemo.rnnt import (
     State,
     Step,
     blank_and_token_log_probabilities,
-    log_softmax_rows,
     transducer_forward,
 )
-from speech_event.recognizers.onnx.hypothesis import Hypothesis
+from speech_event.recognizers.onnx.hypothesis import Hypothesis, log_softmax
 
 
 def tdt_greedy(
@@ -83,7 +82,5 @@ def tdt_log_likelihood(
     where greedy decoding stops.
     """
     split = lattice.shape[-1] - len(durations)
-    blank_lp, token_lp = blank_and_token_log_probabilities(
-        log_softmax_rows(lattice[..., :split]), tokens, blank
-    )
-    return tdt_forward(blank_lp, token_lp, log_softmax_rows(lattice[..., split:]), durations, past_end)
+    blank_lp, token_lp = blank_and_token_log_probabilities(log_softmax(lattice[..., :split]), tokens, blank)
+    return tdt_forward(blank_lp, token_lp, log_softmax(lattice[..., split:]), durations, past_end)

@@ -30,10 +30,12 @@ def open_session(
         raise ModelError(f"{path.parent}: missing {path.name}; {directory_holds}")
     options = onnxruntime.SessionOptions()
     options.log_severity_level = 3
-    # The arena keeps the peak of every run's buffers for the process's life; without it the large
-    # conformer peaks at 479 MiB in int8 instead of 561 (968 instead of 1047 in fp32), as fast
-    # (bench/int8.py, 2 cores).
-    options.enable_cpu_mem_arena = False
+    # The memory pattern plans one block for a run's buffers from the shapes of the runs before
+    # and keeps it; utterances differ in length, so it mostly grows. Without it (the arena still
+    # reuses buffers) the large conformer's int8 peaks at about 470 MiB instead of 560 to 620, and
+    # its encoder runs as fast (fp32 too); without the arena as well, the encoder took 12 % longer
+    # in int8 and 40 % in fp32 (A/B in one process, 2 cores, 10 s of speech).
+    options.enable_mem_pattern = False
     try:
         return onnxruntime.InferenceSession(str(path), options, providers=execution_providers)
     except Exception as problem:  # onnxruntime raises its own exception types

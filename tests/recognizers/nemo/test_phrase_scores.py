@@ -26,7 +26,6 @@ from speech_event.recognizers.nemo.phrase_scores import rnnt_scores, tdt_scores
 from speech_event.recognizers.nemo.recognizer import VOCABULARY_FILE, padded_as_nemo_does
 from speech_event.recognizers.nemo.rnnt import (
     blank_and_token_log_probabilities,
-    log_softmax_rows,
     rnnt_forward,
     rnnt_greedy,
     rnnt_log_likelihood,
@@ -204,7 +203,7 @@ def test_one_token_a_frame_rnnt_is_the_sum_over_every_alignment_of_that_decoding
 ) -> None:
     lattice, tokens = _random_case(seed, frames, length, tokens_with_blank)
     blank = tokens_with_blank - 1
-    log_probabilities = log_softmax_rows(lattice)
+    log_probabilities = log_softmax(lattice)
     found = rnnt_forward(
         *blank_and_token_log_probabilities(log_probabilities, tokens, blank), one_per_frame=True
     )
@@ -311,7 +310,7 @@ def test_the_greedy_rnnt_tokens_are_at_least_as_likely_as_the_greedy_path(
     model, frames = _encoded(models["rnnt"], seed)
     tokens, moves = _greedy_moves(model, frames, ())
     lattice = model.lattice(frames, tokens, BLANK)
-    log_probabilities = log_softmax_rows(lattice)
+    log_probabilities = log_softmax(lattice)
     # greedy's path on the lattice; a frame it left at the max_symbols cap (this model reaches it) is
     # closed by the blank it did not take there, so that the path is an alignment: a term of the sum
     t = u = 0
@@ -339,7 +338,7 @@ def test_the_greedy_tdt_tokens_are_at_least_as_likely_as_the_greedy_path(
     tokens, moves = _greedy_moves(model, frames, TDT_DURATIONS)
     lattice = model.lattice(frames, tokens, BLANK)
     split = lattice.shape[-1] - len(TDT_DURATIONS)
-    token_lp, duration_lp = log_softmax_rows(lattice[..., :split]), log_softmax_rows(lattice[..., split:])
+    token_lp, duration_lp = log_softmax(lattice[..., :split]), log_softmax(lattice[..., split:])
     # greedy's path on the lattice, an alignment as it is on this model: each step where the last
     # move left it, no blank staying, the last a blank landing exactly on T'
     t = u = 0
