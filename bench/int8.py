@@ -1,4 +1,4 @@
-"""fp32 against int8 (python -m bench.int8 [NAME ...]; section (e) of python -m bench.asr).
+"""fp32 against int8 (python -m bench.int8 [--rounds N] [NAME ...]; section (e) of python -m bench.asr).
 
 For each model directory bench/family_models.py wrote (SPEECH_EVENT_FAMILY_MODELS=DIR: the
 conformer-transducer large, the Parakeet-TDT 0.6B shape, Whisper base and small, random weights),
@@ -8,12 +8,13 @@ that engine's alone: our engine's real-time factor on 10 s of speech (the best o
 warm-up) and its peak resident memory, and the same directory through onnx-asr (NeMo directories:
 onnx-asr reads ours as they are; Whisper in optimum's layout, which bench/whisper_optimum_parity.py
 writes, as its "whisper" model; it has no reader for export-whisper's layout), its RTF and ours
-divided by it. The two run in turns, ROUNDS processes each (a shared machine's load changes from
-minute to minute: in turns it weighs on both alike), and each figure is the median of its rounds;
+divided by it. The two run in turns, --rounds processes each (5 by default; a shared machine's
+load changes from minute to minute: in turns it weighs on both alike), each figure the median of its rounds;
 the ratio's range is that of the rounds' own ratios. Last, how often int8 says what fp32 says on
 the command utterances.
 """
 
+import argparse
 import json
 import os
 import statistics
@@ -37,7 +38,6 @@ from speech_event.recognizers.whisper.optimum_layout import is_optimum_directory
 
 SECONDS = 10
 RUNS = 3
-ROUNDS = 5
 
 
 def _speech() -> np.ndarray:
@@ -114,11 +114,11 @@ def _agreement(directory: Path) -> str:
     return f"int8 says what fp32 says on {same}/{len(COMMANDS)} utterances, word agreement {agreement:.3f}"
 
 
-def _line(name: str, quantization: str, cores: int, directory: Path) -> str:
+def _line(name: str, quantization: str, cores: int, directory: Path, rounds: int) -> str:
     ours: List[Dict[str, float]] = []
     theirs: List[Dict[str, float]] = []
     readable = True  # by onnx-asr
-    for _ in range(ROUNDS):
+    for _ in range(rounds):
         mine = _run("ours", directory, quantization, cores)
         assert mine is not None
         ours.append(mine)
@@ -143,7 +143,7 @@ def _median(rounds: List[Dict[str, float]], figure: str) -> float:
     return statistics.median(round_[figure] for round_ in rounds)
 
 
-def figures(names: List[str]) -> None:
+def figures(names: List[str], rounds: int = 5) -> None:
     """Every model directory bench/family_models.py wrote, or those ``names`` name."""
     where = os.environ.get("SPEECH_EVENT_FAMILY_MODELS")
     if not where:
@@ -157,7 +157,7 @@ def figures(names: List[str]) -> None:
             quantize_directory(directory)
         for cores in (2, 1):
             for quantization in ("none", "int8"):
-                print(_line(directory.name, quantization, cores, directory), flush=True)
+                print(_line(directory.name, quantization, cores, directory, rounds), flush=True)
         print(f"(e) {directory.name:18s} {_agreement(directory)}", flush=True)
 
 
@@ -165,4 +165,8 @@ if __name__ == "__main__":
     if sys.argv[1:2] == ["--one"]:
         one(sys.argv[2], Path(sys.argv[3]), sys.argv[4])
         sys.exit(0)
-    figures(sys.argv[1:])
+    parser = argparse.ArgumentParser(description="fp32 against int8, ours beside onnx-asr (issue 21).")
+    parser.add_argument("--rounds", type=int, default=5, help="processes of each, in turns")
+    parser.add_argument("names", nargs="*", help="only these of bench/family_models.py's directories")
+    arguments = parser.parse_args()
+    figures(arguments.names, arguments.rounds)
