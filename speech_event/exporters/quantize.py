@@ -9,6 +9,7 @@ attention layers, Whisper's blocks), and the decoders' LSTM and embeddings stay 
 bench/asr.py measures what it gains and what it changes.
 """
 
+import logging
 import os
 from pathlib import Path
 from typing import List
@@ -17,6 +18,17 @@ from speech_event.recognizers.onnx.directory import INT8_SUFFIXES
 
 INT8_SUFFIX = INT8_SUFFIXES[0]
 INT8_HELP = "also write each ONNX file's int8 version (*.int8.onnx), which quantization int8 runs"
+
+
+# onnxruntime's quantizer says this on the root logger for every file: its pre-processing (shape
+# inference, graph optimisation) helps static quantization's calibration; dynamic MatMul
+# quantization has none, and the advice would only be noise on every export --int8.
+_PREPROCESSING_ADVICE = "Please consider to run pre-processing before quantization"
+
+
+class _WithoutPreprocessingAdvice(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith(_PREPROCESSING_ADVICE)
 
 
 def int8_name(name: str) -> str:
@@ -30,14 +42,19 @@ def quantize_directory(directory: Path) -> List[Path]:
     from onnxruntime.quantization import QuantType, quantize_dynamic
 
     written = []
-    for model in sorted(directory.glob("*.onnx")):
-        if model.name.endswith(INT8_SUFFIXES):
-            continue
-        target = model.with_name(int8_name(model.name))
-        partial = target.with_name(target.name + ".partial")
-        quantize_dynamic(model, partial, op_types_to_quantize=["MatMul"], weight_type=QuantType.QInt8)
-        os.replace(partial, target)
-        written.append(target)
+    advice = _WithoutPreprocessingAdvice()
+    logging.getLogger().addFilter(advice)
+    try:
+        for model in sorted(directory.glob("*.onnx")):
+            if model.name.endswith(INT8_SUFFIXES):
+                continue
+            target = model.with_name(int8_name(model.name))
+            partial = target.with_name(target.name + ".partial")
+            quantize_dynamic(model, partial, op_types_to_quantize=["MatMul"], weight_type=QuantType.QInt8)
+            os.replace(partial, target)
+            written.append(target)
+    finally:
+        logging.getLogger().removeFilter(advice)
     return written
 
 

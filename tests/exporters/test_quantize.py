@@ -2,6 +2,7 @@
 on the fixture models of each decoding: written beside the fp32 files under onnx-asr's names, their
 matrix products int8, and the same texts as fp32 through the node's own engine builder."""
 
+import logging
 import shutil
 from pathlib import Path
 from typing import Callable, Dict, List, Tuple
@@ -109,4 +110,16 @@ def test_export_nemo_int8_quantizes_what_it_exported(
         "en_model_path to it",
         f"wrote {out / 'decoder_joint-model.int8.onnx'} (int8: set quantization int8 to use it)",
         f"wrote {out / 'encoder-model.int8.onnx'} (int8: set quantization int8 to use it)",
+    ]
+
+
+def test_quantizing_leaves_out_onnxruntimes_advice_and_nothing_else(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    directory = _copy("rnnt", tmp_path)
+    with caplog.at_level(logging.WARNING):  # what a user sees (the quantizer's INFO is not shown)
+        quantize_directory(directory)
+        logging.warning("a warning of another kind")  # still said while quantizing is over
+    assert [record.getMessage() for record in caplog.records if record.name == "root"] == [
+        "a warning of another kind"
     ]
