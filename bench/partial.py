@@ -82,10 +82,9 @@ class Engine:
     model: Optional[Callable[[Path], Path]] = None  # builds its model directory in a folder
     stand_in: Optional[Callable[[], Recognizer]] = None  # a stand-in that runs in memory only
 
-    def config(self, base: SpeechEventConfig, work: Path) -> SpeechEventConfig:
-        return dataclasses.replace(
-            base, en_model_path=str(self.model(work)) if self.model else "", model=self.family
-        )
+    def config(self, base: SpeechEventConfig, model: Optional[Path]) -> SpeechEventConfig:
+        """``base`` with this engine's family and its ``model`` directory (built by ``self.model``)."""
+        return dataclasses.replace(base, en_model_path="" if model is None else str(model), model=self.family)
 
     @property
     def family(self) -> str:
@@ -301,9 +300,10 @@ def main() -> None:
         where = "roscore" if arguments.roscore else "memory"
         for name, engine in _engines(arguments.engines, arguments.roscore).items():
             utterances = {seconds: _utterance(engine.voice, seconds) for seconds in LENGTHS}
+            model = engine.model(work) if engine.model else None  # built once, for both configurations
             runs: Dict[Tuple[float, SpeechEventConfig], List[Run]] = {}
             for config in (off, on):
-                with player(engine, engine.config(config, work)) as play:
+                with player(engine, engine.config(config, model)) as play:
                     for seconds, utterance in utterances.items():
                         runs[seconds, config] = [play(utterance) for _ in range(arguments.runs)]
             for seconds, utterance in utterances.items():

@@ -31,7 +31,7 @@ class Outcome:
     # transcript messages are checked to the millisecond), SIM_TIME (ROS time driven by the
     # replay: their texts and order are), REAL_TIME (the wall clock: when a partial comes decides
     # what it has heard, so neither is compared; the final texts are).
-    clock: str = "memory"
+    clock: str = MEMORY
     # In memory: each time one of the node's own timers fired (health checks, utterance ends by
     # whatever rule ended them, goal deadlines, ...). A ROS replay stops its clock at each.
     node_timers: List[float] = field(default_factory=list)

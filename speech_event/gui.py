@@ -76,11 +76,14 @@ def last_text_in(transcript: Optional[object]) -> Optional[str]:
     return f"{getattr(transcript, 'language', '')}, {said}"
 
 
+def _is_error(text: str) -> bool:
+    """The node's errors (SOUND_DETECTION_DOWN, SPEECH_NOT_RECOGNIZED) and the window's own."""
+    return text.startswith("Error:")
+
+
 def _is_transcription(message: object) -> bool:
     """A final text that is speech transcribed, not an error such as soundDetection being down."""
-    return bool(getattr(message, "final", False)) and not str(getattr(message, "text", "")).startswith(
-        "Error:"
-    )
+    return bool(getattr(message, "final", False)) and not _is_error(str(getattr(message, "text", "")))
 
 
 def grammar_in(diagnostics: Optional[DiagnosticArray]) -> Optional[str]:
@@ -200,7 +203,7 @@ class TranscriptWindow:
         self.history.configure(state="normal")
         if self._partial_shown:
             self.history.delete("end-2l", "end-1l")
-        tag = "partial" if partial else "error" if text.startswith("Error:") else "text"
+        tag = "partial" if partial else "error" if _is_error(text) else "text"
         self.history.insert("end", f"{stamp}  {text}\n", tag)
         self._partial_shown = partial
         self.history.configure(state="disabled")

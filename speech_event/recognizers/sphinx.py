@@ -146,13 +146,8 @@ class SphinxRecognizer:
         if grammar is None:
             self._search = None
             return
-        search = self._searches.get(grammar.jsgf)
-        if search is None:
-            self.check_grammar(grammar)
-            search = f"grammar{len(self._searches)}"
-            self._grammars().add_jsgf_string(search, grammar.jsgf)
-            self._searches[grammar.jsgf] = search
-        self._search = search
+        self.check_grammar(grammar)  # at once when it is compiled already
+        self._search = _compiled_search(self._grammars(), self._searches, grammar.jsgf)
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         """The text of one utterance; with a grammar, a whole phrase of it or none (``rejected``)."""
@@ -175,12 +170,7 @@ class SphinxRecognizer:
         if self._partial_open:
             decoder.end_utt()
         if grammar is not None and not self._keywords:
-            search = self._partial_searches.get(grammar.jsgf)
-            if search is None:
-                search = f"grammar{len(self._partial_searches)}"
-                decoder.add_jsgf_string(search, grammar.jsgf)
-                self._partial_searches[grammar.jsgf] = search
-            decoder.activate_search(search)
+            decoder.activate_search(_compiled_search(decoder, self._partial_searches, grammar.jsgf))
         else:
             decoder.activate_search(self._partial_searches[""])
         decoder.start_utt()
@@ -262,6 +252,17 @@ class SphinxRecognizer:
             if not repeated:
                 words.append(word)
         return words
+
+
+def _compiled_search(decoder: Any, searches: Dict[str, str], jsgf: str) -> str:
+    """The name of ``decoder``'s search for the grammar ``jsgf``, added to it the first time
+    (``searches``: that decoder's, JSGF text -> name): each grammar is compiled once."""
+    search = searches.get(jsgf)
+    if search is None:
+        search = f"grammar{len(searches)}"
+        decoder.add_jsgf_string(search, jsgf)
+        searches[jsgf] = search
+    return search
 
 
 def _pcm(audio: np.ndarray) -> bytes:
