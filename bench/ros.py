@@ -19,7 +19,7 @@ import rospy
 from rospy.numpy_msg import numpy_msg
 from std_msgs import msg as std_msgs
 
-from bench.ros_graph import NODE_SCRIPT, RosGraph, ros_graph
+from bench.ros_graph import ROOT, RosGraph, ros_graph
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
 from harness.processes import ReplayError, wait_until
@@ -153,7 +153,7 @@ def engines_on_roscore(graph: RosGraph, runs: int = 2) -> None:
     from bench.latency import LENGTHS, _speech
 
     tones = build_tones_model(graph.work / "tones")
-    grammar = NODE_SCRIPT.parents[1] / "harness" / "data" / "robot_commands.txt"
+    grammar = ROOT / "harness" / "data" / "robot_commands.txt"
     engines = [
         ("fake (tones)", "fake", "", "tones"),
         ("NeMo engine, tones fixture model", "nemo", f"en_model_path {tones}\n", "tones"),

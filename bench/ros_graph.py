@@ -16,8 +16,7 @@ from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosTransport, master_answers
 from speech_event.messages import Float32MultiArray
 
-# The node of this tree, as the ROS replay starts it.
-NODE_SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "speech_event_application.py"
+ROOT = Path(__file__).resolve().parents[1]
 NODE_TIMEOUT = 60.0  # a node whose engine loads a large model takes a while to come up
 
 
@@ -36,7 +35,7 @@ class RosGraph:
         ``subscribed`` (the benchmark's subscriptions to its topics connected) holds."""
         config = self.work / "node.ini"
         config.write_text(settings)
-        command = [sys.executable, str(NODE_SCRIPT), "-c", str(config), "--recognizer", recognizer]
+        command = [sys.executable, "-m", "speech_event", "-c", str(config), "--recognizer", recognizer]
         node = self.processes.start("node", command)
         wait_until(
             lambda: self.signal.connections() > 0 and subscribed(), "the node to connect", NODE_TIMEOUT
@@ -63,7 +62,7 @@ def ros_graph(prefix: str) -> Iterator[RosGraph]:
         ROS_MASTER_URI=f"http://127.0.0.1:{port}",
         ROS_IP="127.0.0.1",
         ROS_HOME=str(work),
-        PYTHONPATH=str(NODE_SCRIPT.parents[1]),  # the node of this tree, not an installed copy
+        PYTHONPATH=str(ROOT),  # the node of this tree, as the ROS replay starts it, not an installed copy
     )
     os.environ.update(environment)
     processes = Processes(environment, work)

@@ -9,6 +9,7 @@ import pytest
 
 from speech_event.config import SpeechEventConfig, load_config, parse_config
 from speech_event.errors import ConfigError
+from tests.helpers.application import run_application
 from tests.helpers.paths import ROOT
 
 
@@ -115,3 +116,23 @@ def test_a_script_run_by_a_python_without_the_project_says_so_in_one_line(
     assert result.stderr == (
         f"error: {sys.executable} cannot import {missing}: see README.md, 'On ROS and on the robot'\n"
     )
+
+
+def test_python_m_speech_event_is_the_node_as_its_script_runs_it(tmp_path: Path) -> None:
+    # What the ROS replay starts: it needs no scripts/ folder, which an installed package lacks.
+    config = tmp_path / "bad.ini"
+    config.write_text("speech_pause_period fast\n")
+    module = subprocess.run(
+        [sys.executable, "-m", "speech_event", "-c", str(config)],
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+    )
+    script = run_application("-c", str(config))
+    assert (module.returncode, module.stdout, module.stderr) == (
+        script.returncode,
+        script.stdout,
+        script.stderr,
+    )
+    assert module.returncode == 2 and module.stderr.startswith("error: ")

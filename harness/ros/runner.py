@@ -59,7 +59,6 @@ from speech_event.messages import (
 
 ROOT = Path(__file__).resolve().parents[2]
 CLOCK_TOPIC = "/clock"
-NODE_SCRIPT = ROOT / "scripts" / "speech_event_application.py"
 STARTUP_TIMEOUT = 60.0
 # Our node sets this to the ROS time it started (its health checks count from there).
 START_TIME_PARAM = "/speechEvent/start_time"
@@ -246,7 +245,8 @@ class RosReplay:
         else:
             command = [
                 sys.executable,
-                str(NODE_SCRIPT),
+                "-m",
+                "speech_event",  # the package this Python sees: the checkout's, or an installed one
                 "-c",
                 str(config_path),
                 "--recognizer",

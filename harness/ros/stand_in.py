@@ -21,7 +21,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 from typing import Any, Callable, List, Optional
 
 import rospy
@@ -36,7 +35,6 @@ from speech_event.adapters.ros import RosPublisher, RosTransport
 from speech_event.application import without_remappings
 from speech_event.messages import Float32MultiArray
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "sound_detection_replay.py"
 CONNECT_TIMEOUT = 30.0
 CLOCK_TICK = 0.005
 CHECKER_READY_TOPIC = "/speechEventReplay/checker_ready"
@@ -167,7 +165,8 @@ class StandIns:
         live_connections: Callable[[], List[Any]],
     ) -> None:
         self._processes = processes
-        self._command = [sys.executable, str(SCRIPT), scenario_path]
+        # This module, as scripts/sound_detection_replay.py runs it; an installed harness has no scripts/.
+        self._command = [sys.executable, "-m", "harness.ros.stand_in", scenario_path]
         if base_config:
             self._command += ["-c", base_config]
         self._live_connections = live_connections
@@ -245,3 +244,7 @@ class StandIns:
         for intruder in self._intruders:
             if intruder.wait(EVENT_TIMEOUT) != 0:
                 raise ReplayError("the wrong-type publisher failed; see its log")
+
+
+if __name__ == "__main__":  # python -m harness.ros.stand_in, as the replay and --autonomous start it
+    sys.exit(main())

@@ -1,5 +1,6 @@
 """A wheel, installed without -e, runs on ROS from any folder (issue 17, item 1): the interface
-definitions ship in it, and their classes are built where the install can write them."""
+definitions ship in it, and their classes are built where the install can write them; its harness
+replays a scenario on ROS without the checkout's scripts/ folder."""
 
 import os
 import shutil
@@ -7,7 +8,7 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
-from typing import Dict, Iterator
+from typing import Dict, Iterator, List
 
 import pytest
 import rospy
@@ -117,3 +118,24 @@ def test_an_install_it_cannot_write_builds_its_classes_in_the_users_cache(
     assert Path(out).parent == tmp_path / "cache" / "speech_event" / "ros_interfaces"
     assert (srv, msg) == (f"{out}/srv/__init__.py", f"{out}/msg/__init__.py")
     assert not (installed / "speech_event" / "srv").exists()
+
+
+@pytest.mark.parametrize("timing", [[], ["--real-time"]], ids=["sim time", "real time"])
+def test_the_installed_harness_replays_a_scenario_on_ros_from_another_folder(
+    roscore: Dict[str, str], installed: Path, tmp_path: Path, timing: List[str]
+) -> None:
+    # It starts the node and the soundDetection stand-in as python -m modules of the install.
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    scenario = shutil.copy(ROOT / "scenarios" / "partials_fake.toml", elsewhere / "partials.toml")
+    done = subprocess.run(
+        [sys.executable, "-m", "harness", "run", "--transport", "ros", *timing, str(scenario)],
+        cwd=elsewhere,
+        env=_away_from_the_checkout(roscore, installed, tmp_path),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert (done.returncode, done.stdout.splitlines()[-1]) == (0, "1 passed, 0 failed"), (
+        done.stdout + done.stderr
+    )
