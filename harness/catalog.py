@@ -1,6 +1,7 @@
 """The voices that speak a scenario's text and the recognizers that can transcribe it, by name."""
 
 import dataclasses
+import importlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 from fixtures.audio import speak_tones
 from fixtures.tts import speak_tts
 from speech_event.config import PATH_KEYS, SpeechEventConfig
+from speech_event.errors import ModelError
 from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS as ENGINES
@@ -44,28 +46,26 @@ VOICES: Dict[str, Voice] = {
 }
 
 
-def _tones_model() -> Path:
-    from fixtures.tones_model import tones_model_directory
+def _fixture(module: str, builder: str) -> Callable[[], Path]:
+    """A fixture model's directory, built on first use by ``module.builder``: the fixtures need
+    onnx (the test extra), which a plain install lacks, so a missing package is a ModelError
+    naming it (the scenario fails with that sentence, the others still run)."""
 
-    return tones_model_directory()
+    def build() -> Path:
+        try:
+            directory: Path = getattr(importlib.import_module(module), builder)()
+        except ModuleNotFoundError as missing:
+            raise ModelError(
+                f"the fixture models are built with {missing.name}, which this Python lacks: "
+                "pip install 'speech-event[test]'"
+            ) from None
+        return directory
+
+    return build
 
 
-def _tones_tdt_model() -> Path:
-    from fixtures.tones_model import tones_tdt_model_directory
-
-    return tones_tdt_model_directory()
-
-
-def _tones_ctc_model() -> Path:
-    from fixtures.tones_model import tones_ctc_model_directory
-
-    return tones_ctc_model_directory()
-
-
-def _whisper_tones_model() -> Path:
-    from fixtures.whisper_tones_model import whisper_tones_model_directory
-
-    return whisper_tones_model_directory()
+_TONES = "fixtures.tones_model"
+_tones_model = _fixture(_TONES, "tones_model_directory")
 
 
 @dataclass(frozen=True)
@@ -85,9 +85,11 @@ FIXTURE_WHISPER = "fixture-whisper"
 # (fixtures/tones_model.py), and a Whisper model (fixtures/whisper_tones_model.py).
 FIXTURE_MODELS: Dict[str, FixtureModel] = {
     FIXTURE_MODEL: FixtureModel("nemo", CONFORMER_TRANSDUCER, _tones_model),
-    FIXTURE_PARAKEET: FixtureModel("nemo", PARAKEET, _tones_tdt_model),
-    FIXTURE_CTC: FixtureModel("nemo", PARAKEET, _tones_ctc_model),
-    FIXTURE_WHISPER: FixtureModel("whisper", WHISPER, _whisper_tones_model),
+    FIXTURE_PARAKEET: FixtureModel("nemo", PARAKEET, _fixture(_TONES, "tones_tdt_model_directory")),
+    FIXTURE_CTC: FixtureModel("nemo", PARAKEET, _fixture(_TONES, "tones_ctc_model_directory")),
+    FIXTURE_WHISPER: FixtureModel(
+        "whisper", WHISPER, _fixture("fixtures.whisper_tones_model", "whisper_tones_model_directory")
+    ),
 }
 RECOGNIZERS = (*ENGINES, *FIXTURE_MODELS)
 # A model path written so in a scenario's [config] is a model built at test time.

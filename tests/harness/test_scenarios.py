@@ -165,6 +165,23 @@ def test_a_scenario_whose_vad_is_not_installed_says_what_to_install_and_the_othe
     ]
 
 
+def test_a_fixture_model_scenario_without_onnx_says_what_to_install_and_the_others_run() -> None:
+    # After a plain 'pip install .' (no test extra), as replaying every scenario showed.
+    hidden = (
+        "import sys; sys.modules['onnx'] = None; from harness.cli import main; "
+        "sys.exit(main(['run', 'scenarios/grammar_fixture_ctc.toml', 'scenarios/single_utterance.toml']))"
+    )
+    result = subprocess.run([sys.executable, "-c", hidden], cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 1
+    assert result.stdout.splitlines() == [
+        "FAIL  grammar_fixture_ctc  (scenarios/grammar_fixture_ctc.toml)",
+        "      cannot run: the fixture models are built with onnx, which this Python lacks: "
+        "pip install 'speech-event[test]'",
+        "PASS  one command  (scenarios/single_utterance.toml, 1 messages)",
+        "1 passed, 1 failed",
+    ]
+
+
 def test_the_demo_turns_real_speech_into_text_on_embedded_defaults() -> None:
     result = _harness("demo", "go to the kitchen")
     assert result.returncode == 0, result.stderr
