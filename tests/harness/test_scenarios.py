@@ -148,35 +148,36 @@ def test_a_scenario_that_cannot_be_loaded_is_named_and_the_others_still_run(tmp_
     ]
 
 
-def test_a_scenario_whose_vad_is_not_installed_says_what_to_install_and_the_others_run() -> None:
-    # After the demo's install alone (no silero-vad), as a new user found (issue 17, item 4).
-    hidden = (
-        "import sys; sys.modules['silero_vad'] = None; from harness.cli import main; "
-        "sys.exit(main(['run', 'scenarios/tts_vad_threshold.toml', 'scenarios/single_utterance.toml']))"
+@pytest.mark.parametrize(
+    ("hidden", "scenario", "says"),
+    [
+        # After the demo's install alone (no silero-vad), as a new user found (issue 17, item 4).
+        (
+            "silero_vad",
+            "tts_vad_threshold",
+            "vad_threshold needs Silero VAD's ONNX model, shipped in the silero-vad wheel: "
+            "pip install --no-deps silero-vad (its torch dependency is not needed)",
+        ),
+        # After a plain 'pip install .' (no test extra), as replaying every scenario showed.
+        (
+            "onnx",
+            "grammar_fixture_ctc",
+            "the fixture models are built with onnx, which this Python lacks: pip install 'speech-event[test]'",
+        ),
+    ],
+)
+def test_a_scenario_whose_package_is_not_installed_says_what_to_install_and_the_others_run(
+    hidden: str, scenario: str, says: str
+) -> None:
+    code = (
+        f"import sys; sys.modules[{hidden!r}] = None; from harness.cli import main; "
+        f"sys.exit(main(['run', 'scenarios/{scenario}.toml', 'scenarios/single_utterance.toml']))"
     )
-    result = subprocess.run([sys.executable, "-c", hidden], cwd=ROOT, capture_output=True, text=True)
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
     assert result.returncode == 1
     assert result.stdout.splitlines() == [
-        "FAIL  tts_vad_threshold  (scenarios/tts_vad_threshold.toml)",
-        "      cannot run: vad_threshold needs Silero VAD's ONNX model, shipped in the silero-vad wheel: "
-        "pip install --no-deps silero-vad (its torch dependency is not needed)",
-        "PASS  one command  (scenarios/single_utterance.toml, 1 messages)",
-        "1 passed, 1 failed",
-    ]
-
-
-def test_a_fixture_model_scenario_without_onnx_says_what_to_install_and_the_others_run() -> None:
-    # After a plain 'pip install .' (no test extra), as replaying every scenario showed.
-    hidden = (
-        "import sys; sys.modules['onnx'] = None; from harness.cli import main; "
-        "sys.exit(main(['run', 'scenarios/grammar_fixture_ctc.toml', 'scenarios/single_utterance.toml']))"
-    )
-    result = subprocess.run([sys.executable, "-c", hidden], cwd=ROOT, capture_output=True, text=True)
-    assert result.returncode == 1
-    assert result.stdout.splitlines() == [
-        "FAIL  grammar_fixture_ctc  (scenarios/grammar_fixture_ctc.toml)",
-        "      cannot run: the fixture models are built with onnx, which this Python lacks: "
-        "pip install 'speech-event[test]'",
+        f"FAIL  {scenario}  (scenarios/{scenario}.toml)",
+        f"      cannot run: {says}",
         "PASS  one command  (scenarios/single_utterance.toml, 1 messages)",
         "1 passed, 1 failed",
     ]
