@@ -94,10 +94,19 @@ def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
 def peak_mib() -> float:
     """This process's peak resident memory: VmHWM, which starts afresh at exec (ru_maxrss does not:
     it would carry the parent's peak, the quantizer's among it)."""
+    return _status_mib("VmHWM")
+
+
+def resident_mib() -> float:
+    """This process's resident memory now (VmRSS)."""
+    return _status_mib("VmRSS")
+
+
+def _status_mib(field: str) -> float:
     for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("VmHWM:"):
+        if line.startswith(f"{field}:"):
             return int(line.split()[1]) / 1024
-    raise RuntimeError("no VmHWM in /proc/self/status")
+    raise RuntimeError(f"no {field} in /proc/self/status")
 
 
 def score(recognizer: Recognizer, samples: Sequence[Tuple[str, np.ndarray]]) -> Tuple[float, float]:

@@ -5,13 +5,14 @@ conformer-transducer large, the Parakeet-TDT 0.6B shape, Whisper base and small,
 its int8 files are written once (speech_event/exporters/quantize.py, as export --int8 does). Then,
 on 2 cores and on 1 (taskset -c 0), each figure in a process of its own so that its peak memory is
 that engine's alone: our engine's real-time factor on 10 s of speech (the best of 3 runs after a
-warm-up) and its peak resident memory, and the same directory through onnx-asr (NeMo directories:
-onnx-asr reads ours as they are; Whisper in optimum's layout, which bench/whisper_optimum_parity.py
-writes, as its "whisper" model; it has no reader for export-whisper's layout), its RTF and ours
-divided by it. The two run in turns, --rounds processes each (5 by default; a shared machine's
-load changes from minute to minute: in turns it weighs on both alike), each figure the median of its rounds;
-the ratio's range is that of the rounds' own ratios. Last, how often int8 says what fp32 says on
-the command utterances.
+warm-up), its peak resident memory and the model's own share of it (what loading it added: the peak
+also holds the interpreter's 70-odd MiB and a run's buffers), and the same directory through onnx-asr
+(NeMo directories: onnx-asr reads ours as they are; Whisper in optimum's layout, which
+bench/whisper_optimum_parity.py writes, as its "whisper" model; it has no reader for export-whisper's
+layout), its RTF and ours divided by it. The two run in turns, --rounds processes each (5
+by default; a shared machine's load changes from minute to minute: in turns it weighs on both
+alike), each figure the median of its rounds; the ratio's range is that of the rounds' own ratios.
+Last, how often int8 says what fp32 says on the command utterances.
 """
 
 import argparse
@@ -26,7 +27,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from bench.asr import COMMANDS, peak_mib, word_errors
+from bench.asr import COMMANDS, peak_mib, resident_mib, word_errors
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.exporters.quantize import quantize_directory
@@ -69,25 +70,30 @@ def _onnx_asr(directory: Path, quantization: str) -> Optional[Callable[[np.ndarr
     return lambda audio: model.recognize(audio, sample_rate=16000, **language)
 
 
-def _measure(transcribe: Callable[[np.ndarray], object]) -> Dict[str, float]:
+def _measure(load: Callable[[], Optional[Callable[[np.ndarray], object]]]) -> Optional[Dict[str, float]]:
+    """``load``'s model: its RTF, the process's peak memory and what loading it added to the
+    resident memory (the model's own share, without the interpreter's and the run's buffers)."""
     audio = _speech()
+    before = resident_mib()
+    transcribe = load()
+    if transcribe is None:
+        return None
+    loaded = resident_mib() - before
     transcribe(audio)  # warm
     best = float("inf")
     for _ in range(RUNS):
         started = time.perf_counter()
         transcribe(audio)
         best = min(best, time.perf_counter() - started)
-    return {"rtf": best / SECONDS, "peak_mib": peak_mib()}
+    return {"rtf": best / SECONDS, "peak_mib": peak_mib(), "loaded_mib": loaded}
 
 
 def one(runtime: str, directory: Path, quantization: str) -> None:
     """In a process of its own: one engine's figures, as one JSON line."""
     if runtime == "ours":
-        engine = _engine(directory, quantization)
-        figures: Optional[Dict[str, float]] = _measure(lambda audio: engine.transcribe(audio))
+        figures = _measure(lambda: _engine(directory, quantization).transcribe)
     else:
-        model = _onnx_asr(directory, quantization)
-        figures = None if model is None else _measure(model)
+        figures = _measure(lambda: _onnx_asr(directory, quantization))
     print(json.dumps(figures))
 
 
@@ -126,17 +132,21 @@ def _line(name: str, quantization: str, cores: int, directory: Path, rounds: int
         readable = other is not None
         if other is not None:
             theirs.append(other)
-    figures = f"RTF {_median(ours, 'rtf'):.3f}, peak {_median(ours, 'peak_mib'):.0f} MiB"
+    figures = f"RTF {_median(ours, 'rtf'):.3f}, {_memory(ours)}"
     if not theirs:
         compared = "onnx-asr: no reader for this layout"
     else:
         ratios = [mine["rtf"] / other["rtf"] for mine, other in zip(ours, theirs)]
         compared = (
-            f"onnx-asr RTF {_median(theirs, 'rtf'):.3f}, peak {_median(theirs, 'peak_mib'):.0f} MiB; "
+            f"onnx-asr RTF {_median(theirs, 'rtf'):.3f}, {_memory(theirs)}; "
             f"ours / onnx-asr {_median(ours, 'rtf') / _median(theirs, 'rtf'):.2f} "
             f"(rounds {min(ratios):.2f} to {max(ratios):.2f})"
         )
     return f"(e) {name:18s} {quantization:4s} {cores} core{'s' if cores > 1 else ' '}: {figures}; {compared}"
+
+
+def _memory(rounds: List[Dict[str, float]]) -> str:
+    return f"peak {_median(rounds, 'peak_mib'):.0f} MiB (model {_median(rounds, 'loaded_mib'):.0f})"
 
 
 def _median(rounds: List[Dict[str, float]], figure: str) -> float:

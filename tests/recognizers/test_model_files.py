@@ -1,6 +1,7 @@
 """Which of a model directory's ONNX files an engine runs (onnx/directory.py's Runtime): the fp32
 file or its int8 version, by the quantization key and by what is there; and how it is opened."""
 
+import platform
 from pathlib import Path
 from typing import List
 
@@ -8,6 +9,7 @@ import pytest
 
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
+from speech_event.recognizers.onnx import session as session_module
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.onnx.session import open_session
 
@@ -42,9 +44,24 @@ def test_int8_asked_where_there_is_none_says_how_to_get_it(tmp_path: Path) -> No
     )
 
 
-def test_sessions_run_without_a_memory_pattern_but_with_the_arena() -> None:
+def test_sessions_run_without_a_memory_pattern_but_with_the_arena_and_their_weights_outside_it() -> None:
     # the pattern keeps the largest utterance's plan for the process's life; the arena makes runs
-    # fast (speech_event/recognizers/onnx/session.py)
+    # fast, but rounds the weights' blocks up (speech_event/recognizers/onnx/session.py)
     session = open_session(whisper_tones_model_directory() / "encoder.onnx", ["CPUExecutionProvider"], "")
     options = session.get_session_options()
     assert (options.enable_mem_pattern, options.enable_cpu_mem_arena) == (False, True)
+    assert options.get_session_config_entry("session.use_device_allocator_for_initializers") == "1"
+
+
+def test_each_loaded_model_gives_the_heap_its_parsing_freed_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert (session_module._TRIM_HEAP is not None) == (platform.libc_ver()[0] == "glibc")
+    trimmed: List[int] = []
+
+    def trim(pad: int) -> int:
+        trimmed.append(pad)
+        return 1
+
+    monkeypatch.setattr(session_module, "_TRIM_HEAP", trim)
+    open_session(whisper_tones_model_directory() / "encoder.onnx", ["CPUExecutionProvider"], "")
+    open_session(whisper_tones_model_directory() / "decoder.onnx", ["CPUExecutionProvider"], "")
+    assert trimmed == [0, 0]
