@@ -6,7 +6,7 @@ The prompt's decoder pass is shared: it runs once, then each phrase's tokens run
 call from a fork of the prompt's key/value cache.
 """
 
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -76,12 +76,14 @@ def score_phrases(
     prompt: Sequence[int],
     sequences: Sequence[Sequence[int]],
     manifest: WhisperManifest,
+    prompted: Optional[np.ndarray] = None,
 ) -> List[float]:
     """Each token sequence's ``forced_log_likelihood`` after ``prompt`` in the audio's decoding
-    ``session``, given no token yet: one decoder pass for the prompt, then one per non-empty sequence,
-    all its tokens from a fork of the prompt's cache. An empty sequence is eot at the first
-    position, which Whisper's rules rule out: -inf."""
-    after_prompt = session(prompt)[-1:]
+    ``session``: one decoder pass for the prompt, then one per non-empty sequence, all its tokens
+    from a fork of the prompt's cache. An empty sequence is eot at the first position, which
+    Whisper's rules rule out: -inf. ``session`` is given no token yet, or, with ``prompted`` (the
+    prompt's logits), the prompt alone."""
+    after_prompt = (session(prompt) if prompted is None else prompted)[-1:]
     scores: List[float] = []
     for tokens in sequences:
         if len(prompt) + len(tokens) > manifest.text_context:

@@ -38,13 +38,18 @@ def whisper_logits(logits: np.ndarray, first: bool, manifest: WhisperManifest) -
     return row
 
 
-def whisper_greedy(step: Step, prompt: Sequence[int], manifest: WhisperManifest) -> WhisperResult:
+def whisper_greedy(
+    step: Step, prompt: Sequence[int], manifest: WhisperManifest, prompted: Optional[np.ndarray] = None
+) -> WhisperResult:
     """Greedy decoding after ``prompt`` by Whisper's rules: the text tokens, the no-speech probability
     and the score. The score sums the log-probability of each sampled token and, when decoding ended
     on eot, of that eot: log P(tokens, eot), what teacher forcing gives a phrase. Ended on
     ``sample_len`` tokens or the decoder's context, it has no eot term: log P(tokens) of an unfinished
-    text, which a finished phrase of the same tokens cannot exceed."""
-    logits = step(prompt)
+    text, which a finished phrase of the same tokens cannot exceed.
+
+    ``prompted``: the prompt's logits when ``step`` has been given the prompt already (a grammar's
+    phrases are scored from the same pass)."""
+    logits = step(prompt) if prompted is None else prompted
     no_speech: Optional[float] = None
     if manifest.no_speech is not None:
         no_speech = float(np.exp(log_softmax(logits[prompt.index(manifest.sot)])[manifest.no_speech]))

@@ -140,11 +140,13 @@ class WhisperRecognizer:
     def _within(self, forms: PhraseForms, audio: np.ndarray, run: onnxruntime.RunOptions) -> Transcript:
         """The phrase of the grammar said in ``audio`` (at most 30 s), or none."""
         decoding = self._model.decoding(whisper_log_mel(audio, self._manifest.mel_bands), run)
-        free = whisper_greedy(decoding.fork(), self._prompt, self._manifest)
+        prompted = decoding(self._prompt)  # one pass, from which the free text and the phrases go on
+        free = whisper_greedy(decoding.fork(), self._prompt, self._manifest, prompted)
         owners: List[Tuple[str, List[int]]] = [
             (phrase, tokens) for phrase, each in forms.items() for tokens in each
         ]
-        scores = score_phrases(decoding, self._prompt, [tokens for _, tokens in owners], self._manifest)
+        sequences = [tokens for _, tokens in owners]
+        scores = score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)
         best: Dict[str, float] = {}
         for (phrase, _), score in zip(owners, scores):
             best[phrase] = max(score, best.get(phrase, -np.inf))

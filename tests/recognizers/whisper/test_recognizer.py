@@ -15,11 +15,13 @@ from fixtures.whisper_tones_model import MANIFEST as TONES_MANIFEST
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
 from speech_event.exporters.whisper import languages_of, parse_language
+from speech_event.grammar import requested_grammar
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.onnx.mel import mel_filterbank
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of, token_lines
+from speech_event.recognizers.whisper.model import Decoding, WhisperModel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer, pieces_at_quiet_points
 from tests.helpers.application import run_application
 from tests.helpers.cancelling import failures_of_a_cancelled_transcription
@@ -154,6 +156,37 @@ def test_noise_alone_is_no_text_and_low_confidence(engine: WhisperRecognizer) ->
     transcript = engine.transcribe(noise(RATE, -40.0, np.random.default_rng(1)))
     assert transcript.text == ""
     assert transcript.confidence is not None and transcript.confidence < 0.5
+
+
+class _Recorded:
+    """A decoding that records the tokens of each of its passes and of its forks' passes."""
+
+    def __init__(self, decoding: Decoding, passes: List[List[int]]) -> None:
+        self._decoding, self.passes = decoding, passes
+
+    def __call__(self, tokens: Sequence[int]) -> np.ndarray:
+        self.passes.append(list(tokens))
+        return self._decoding(tokens)
+
+    def fork(self) -> "_Recorded":
+        return _Recorded(self._decoding.fork(), self.passes)
+
+
+def test_within_a_grammar_the_prompt_runs_once_for_the_free_text_and_every_phrase(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    grammar = requested_grammar("stop|go left")
+    engine = WhisperRecognizer(whisper_tones_model_directory(), "english", grammar=grammar)
+    passes: List[List[int]] = []
+    decoding = WhisperModel.decoding
+    monkeypatch.setattr(
+        WhisperModel, "decoding", lambda model, mel, run=None: _Recorded(decoding(model, mel, run), passes)
+    )
+    assert engine.transcribe(_speech("stop")).text == "stop"
+    # the prompt first, then the free text token by token and each phrase's forms, all from its cache
+    assert passes[0] == TONES_MANIFEST.prompt("english")
+    assert [tokens for tokens in passes if TONES_MANIFEST.sot in tokens] == passes[:1]
+    assert len(passes) > 3
 
 
 def test_speech_longer_than_30_s_is_transcribed_piece_by_piece(engine: WhisperRecognizer) -> None:
