@@ -16,8 +16,8 @@ import numpy as np
 import onnxruntime
 
 from speech_event.recognizers.nemo.model import LstmState, TransducerModel
-from speech_event.recognizers.nemo.rnnt import rnnt_forward
-from speech_event.recognizers.nemo.tdt import tdt_forward
+from speech_event.recognizers.nemo.rnnt import padded, rnnt_moves, transducer_forwards
+from speech_event.recognizers.nemo.tdt import tdt_moves
 from speech_event.recognizers.onnx.hypothesis import log_softmax
 
 # Decoder-joint rows (trie nodes x frames) per call: bounds the memory of one call.
@@ -44,13 +44,14 @@ def rnnt_scores(
     run: Optional[onnxruntime.RunOptions] = None,
 ) -> List[float]:
     """log P(sequence | audio) for each of ``sequences`` under an RNN-T model, as
-    ``rnnt_log_likelihood`` gives it (``one_per_frame``: as ``rnnt_forward`` says); ``frames``
+    ``rnnt_log_likelihood`` gives it (``one_per_frame``: as ``rnnt_moves`` says); ``frames``
     [T', D] are the encoder's."""
+    if not sequences:
+        return []
     nodes = _trie_log_probabilities(model, frames, sequences, blank, 0, run)
-    return [
-        rnnt_forward(*_blank_and_token(nodes, sequence, len(frames)), one_per_frame=one_per_frame)
-        for sequence in sequences
-    ]
+    blank_lp, token_lp, lengths = _blank_and_token(nodes, sequences, len(frames))
+    blank_moves, token_moves, past_end = rnnt_moves(blank_lp, token_lp, one_per_frame)
+    return transducer_forwards(blank_moves, token_moves, lengths, past_end)
 
 
 def tdt_scores(
@@ -64,24 +65,35 @@ def tdt_scores(
 ) -> List[float]:
     """log P(sequence | audio) for each of ``sequences`` under a TDT model, as ``tdt_log_likelihood``
     gives it; ``frames`` [T', D] are the encoder's, ``durations`` as config.json lists them."""
+    if not sequences:
+        return []
     nodes = _trie_log_probabilities(model, frames, sequences, blank, len(durations), run)
-    scores = []
-    for sequence in sequences:
-        blank_lp, token_lp = _blank_and_token(nodes, sequence, len(frames))
-        prefixes = [tuple(sequence[:u]) for u in range(len(sequence) + 1)]
-        duration_lp = np.stack([nodes[prefix].durations for prefix in prefixes], axis=1)
-        scores.append(tdt_forward(blank_lp, token_lp, duration_lp, durations, past_end))
-    return scores
+    blank_lp, token_lp, lengths = _blank_and_token(nodes, sequences, len(frames))
+    duration_lp = padded(
+        [np.stack([nodes[prefix].durations for prefix in _prefixes(s)], axis=1) for s in sequences],
+        max(lengths) + 1,
+    )
+    return transducer_forwards(*tdt_moves(blank_lp, token_lp, duration_lp, durations), lengths, past_end)
+
+
+def _prefixes(sequence: Sequence[int]) -> List[Prefix]:
+    return [tuple(sequence[:u]) for u in range(len(sequence) + 1)]
 
 
 def _blank_and_token(
-    nodes: Dict[Prefix, _Node], sequence: Sequence[int], frames: int
-) -> Tuple[np.ndarray, np.ndarray]:
-    """The blank's log-probabilities [T', U + 1] and the next token's [T', U] along ``sequence``."""
-    prefixes = [tuple(sequence[:u]) for u in range(len(sequence) + 1)]
-    blank = np.stack([nodes[prefix].blank for prefix in prefixes], axis=1)
-    tokens = [nodes[prefix].next_tokens[token] for prefix, token in zip(prefixes, sequence)]
-    return blank, np.stack(tokens, axis=1) if tokens else np.zeros((frames, 0))
+    nodes: Dict[Prefix, _Node], sequences: Sequence[Sequence[int]], frames: int
+) -> Tuple[np.ndarray, np.ndarray, List[int]]:
+    """Along each of ``sequences``, ``padded`` to the longest: the blank's log-probabilities
+    [P, T', U + 1] and the next token's [P, T', U]; and the sequences' lengths."""
+    lengths = [len(sequence) for sequence in sequences]
+    blank = [np.stack([nodes[prefix].blank for prefix in _prefixes(s)], axis=1) for s in sequences]
+    tokens = [
+        np.stack([nodes[prefix].next_tokens[token] for prefix, token in zip(_prefixes(s), s)], axis=1)
+        if s
+        else np.zeros((frames, 0))
+        for s in sequences
+    ]
+    return padded(blank, max(lengths) + 1), padded(tokens, max(lengths)), lengths
 
 
 def _trie_log_probabilities(

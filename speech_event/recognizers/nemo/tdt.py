@@ -9,11 +9,12 @@ same frame, and after ``max_symbols`` tokens on one frame time moves on by 1.
 Also the exact log-likelihood of a given token sequence under the TDT model (all alignments summed).
 """
 
-from typing import Sequence
+from typing import Sequence, Tuple
 
 import numpy as np
 
 from speech_event.recognizers.nemo.rnnt import (
+    Moves,
     State,
     Step,
     blank_and_token_log_probabilities,
@@ -49,6 +50,17 @@ def tdt_greedy(
     return found
 
 
+def tdt_moves(
+    blank: np.ndarray, token: np.ndarray, duration: np.ndarray, durations: Sequence[int]
+) -> Tuple[Moves, Moves]:
+    """``transducer_forward``'s moves for TDT, from the blank's log-probabilities [..., T', U + 1],
+    the next token's [..., T', U] and the durations' [..., T', U + 1, len(durations)]: each move is a
+    token or blank and a duration."""
+    blank_moves = {d: blank + duration[..., i] for i, d in enumerate(durations) if d > 0}
+    token_moves = {d: token + duration[..., :-1, i] for i, d in enumerate(durations)}
+    return blank_moves, token_moves
+
+
 def tdt_forward(
     blank: np.ndarray,
     token: np.ndarray,
@@ -57,12 +69,10 @@ def tdt_forward(
     past_end: bool = False,
 ) -> float:
     """log P(tokens) from the blank's log-probabilities [T', U + 1], the next token's [T', U] and
-    the durations' [T', U + 1, len(durations)]: each move is a token or blank and a duration.
-    ``past_end``: paths end where greedy decoding stops, on reaching or passing T' (see
-    ``transducer_forward``), not only on a blank landing exactly on T' as in NeMo's loss."""
-    blank_moves = {d: blank + duration[:, :, i] for i, d in enumerate(durations) if d > 0}
-    token_moves = {d: token + duration[:, :-1, i] for i, d in enumerate(durations)}
-    return transducer_forward(blank_moves, token_moves, past_end)
+    the durations' [T', U + 1, len(durations)] (see ``tdt_moves``). ``past_end``: paths end where
+    greedy decoding stops, on reaching or passing T' (see ``transducer_forward``), not only on a
+    blank landing exactly on T' as in NeMo's loss."""
+    return transducer_forward(*tdt_moves(blank, token, duration, durations), past_end)
 
 
 def tdt_log_likelihood(

@@ -400,27 +400,41 @@ def _counted_joint(monkeypatch: pytest.MonkeyPatch, model: TransducerModel) -> L
     return calls
 
 
+@pytest.mark.parametrize("where_greedy_stops", [False, True])  # TDT past_end, RNN-T one_per_frame
 @pytest.mark.parametrize("one_node_a_call", [False, True])
 @pytest.mark.parametrize("kind", ["rnnt", "tdt"])
 def test_the_trie_scores_every_sequence_as_scoring_it_alone_calling_the_joint_once_per_prefix(
-    models: Dict[str, Path], monkeypatch: pytest.MonkeyPatch, kind: str, one_node_a_call: bool
+    models: Dict[str, Path],
+    monkeypatch: pytest.MonkeyPatch,
+    kind: str,
+    one_node_a_call: bool,
+    where_greedy_stops: bool,
 ) -> None:
     model, frames = _encoded(models[kind], 1)
     sequences = [VOCABULARY.encode(phrase) for phrase in PHRASES]
+    lattices = [model.lattice(frames, s, BLANK) for s in sequences]
     if kind == "tdt":
         alone = [
-            tdt_log_likelihood(model.lattice(frames, s, BLANK), s, BLANK, TDT_DURATIONS) for s in sequences
+            tdt_log_likelihood(lattice, s, BLANK, TDT_DURATIONS, where_greedy_stops)
+            for lattice, s in zip(lattices, sequences)
         ]
     else:
-        alone = [rnnt_log_likelihood(model.lattice(frames, s, BLANK), s, BLANK) for s in sequences]
+        alone = [
+            rnnt_forward(
+                *blank_and_token_log_probabilities(log_softmax(lattice), s, BLANK),
+                one_per_frame=where_greedy_stops,
+            )
+            for lattice, s in zip(lattices, sequences)
+        ]
     if one_node_a_call:  # the rows cap splits the nodes of a depth: here to one a call
         monkeypatch.setattr(phrase_scores, "MAX_ROWS", 1)
     calls = _counted_joint(monkeypatch, model)
     if kind == "tdt":
-        together = tdt_scores(model, frames, sequences, BLANK, TDT_DURATIONS)
+        together = tdt_scores(model, frames, sequences, BLANK, TDT_DURATIONS, where_greedy_stops)
     else:
-        together = rnnt_scores(model, frames, sequences, BLANK)
-    assert together == alone
+        together = rnnt_scores(model, frames, sequences, BLANK, where_greedy_stops)
+    assert together == alone  # exactly: all phrases in one forward pass, each as it is alone
+    assert len(set(together)) == len(together)
     prefixes = {tuple(s[:u]) for s in sequences for u in range(len(s) + 1)}
     assert sum(calls) == len(prefixes)  # each prefix once, all sequences sharing it
     deepest = max(len(s) for s in sequences)
