@@ -12,8 +12,7 @@ from harness.report import passed, report
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
 from speech_event.config import SpeechEventConfig
 from tests.helpers.paths import ROOT
-
-SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+from tests.helpers.scenario_files import SCENARIOS
 
 
 def test_there_are_scenarios_for_every_behaviour_the_issue_names() -> None:
@@ -30,13 +29,6 @@ def test_there_are_scenarios_for_every_behaviour_the_issue_names() -> None:
         "outage_right_after_speech",
         "outage_then_recovery",
     } <= names
-
-
-@pytest.mark.parametrize("path", SCENARIOS, ids=[path.stem for path in SCENARIOS])
-def test_scenario_passes_in_memory(path: Path) -> None:
-    scenario = load_scenario(path, SpeechEventConfig())
-    outcome = run_in_memory(scenario)
-    assert passed(scenario, outcome), report(scenario, outcome)
 
 
 def test_a_replay_is_deterministic_to_the_message_and_the_time() -> None:
