@@ -16,7 +16,7 @@ import numpy as np
 import onnxruntime
 
 from speech_event.recognizers.nemo.model import LstmState, TransducerModel
-from speech_event.recognizers.nemo.rnnt import padded, rnnt_moves, transducer_forwards
+from speech_event.recognizers.nemo.rnnt import PAD, rnnt_moves, transducer_forwards
 from speech_event.recognizers.nemo.tdt import tdt_moves
 from speech_event.recognizers.onnx.hypothesis import log_softmax
 
@@ -49,7 +49,7 @@ def rnnt_scores(
     if not sequences:
         return []
     nodes = _trie_log_probabilities(model, frames, sequences, blank, 0, run)
-    blank_lp, token_lp, lengths = _blank_and_token(nodes, sequences, len(frames))
+    blank_lp, token_lp, _, lengths = _along(nodes, sequences, len(frames), 0)
     blank_moves, token_moves, past_end = rnnt_moves(blank_lp, token_lp, one_per_frame)
     return transducer_forwards(blank_moves, token_moves, lengths, past_end)
 
@@ -68,32 +68,29 @@ def tdt_scores(
     if not sequences:
         return []
     nodes = _trie_log_probabilities(model, frames, sequences, blank, len(durations), run)
-    blank_lp, token_lp, lengths = _blank_and_token(nodes, sequences, len(frames))
-    duration_lp = padded(
-        [np.stack([nodes[prefix].durations for prefix in _prefixes(s)], axis=1) for s in sequences],
-        max(lengths) + 1,
-    )
+    blank_lp, token_lp, duration_lp, lengths = _along(nodes, sequences, len(frames), len(durations))
     return transducer_forwards(*tdt_moves(blank_lp, token_lp, duration_lp, durations), lengths, past_end)
 
 
-def _prefixes(sequence: Sequence[int]) -> List[Prefix]:
-    return [tuple(sequence[:u]) for u in range(len(sequence) + 1)]
-
-
-def _blank_and_token(
-    nodes: Dict[Prefix, _Node], sequences: Sequence[Sequence[int]], frames: int
-) -> Tuple[np.ndarray, np.ndarray, List[int]]:
-    """Along each of ``sequences``, ``padded`` to the longest: the blank's log-probabilities
-    [P, T', U + 1] and the next token's [P, T', U]; and the sequences' lengths."""
+def _along(
+    nodes: Dict[Prefix, _Node], sequences: Sequence[Sequence[int]], frames: int, duration_count: int
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray, List[int]]:
+    """Along each of ``sequences``, in rows padded past its end with ``PAD`` as
+    ``transducer_forwards`` takes them: the blank's log-probabilities [P, T', U + 1], the next
+    token's [P, T', U] and the durations' [P, T', U + 1, duration_count]; and the lengths."""
     lengths = [len(sequence) for sequence in sequences]
-    blank = [np.stack([nodes[prefix].blank for prefix in _prefixes(s)], axis=1) for s in sequences]
-    tokens = [
-        np.stack([nodes[prefix].next_tokens[token] for prefix, token in zip(_prefixes(s), s)], axis=1)
-        if s
-        else np.zeros((frames, 0))
-        for s in sequences
-    ]
-    return padded(blank, max(lengths) + 1), padded(tokens, max(lengths)), lengths
+    width = max(lengths) + 1
+    blank = np.full((len(sequences), frames, width), PAD)
+    token = np.full((len(sequences), frames, width - 1), PAD)
+    duration = np.full((len(sequences), frames, width, duration_count), PAD)
+    for row, sequence in enumerate(sequences):
+        for u in range(len(sequence) + 1):
+            node = nodes[tuple(sequence[:u])]
+            blank[row, :, u] = node.blank
+            duration[row, :, u] = node.durations
+            if u < len(sequence):
+                token[row, :, u] = node.next_tokens[sequence[u]]
+    return blank, token, duration, lengths
 
 
 def _trie_log_probabilities(

@@ -20,7 +20,10 @@ State = TypeVar("State")
 Step = Callable[[np.ndarray, int, State], Tuple[np.ndarray, State]]
 # A move's frames on -> its log-probability at every (t, u): see ``transducer_forward``.
 Moves = Dict[int, np.ndarray]
-_PAD = -1e30
+# What ``transducer_forwards`` takes past a shorter sequence's end: a log-probability finite (so
+# that the running sums of the stay-on-frame moves never meet inf - inf) and so low that nothing
+# it reaches counts.
+PAD = -1e30
 
 
 def rnnt_greedy(
@@ -73,7 +76,7 @@ def transducer_forwards(
 ) -> List[float]:
     """``transducer_forward`` of many token sequences at once (a grammar's phrases), each
     ``lengths[p]`` tokens long: ``blank_moves[d]`` [P, T', U + 1], ``token_moves[d]`` [P, T', U] with U
-    the longest length, sequence p in row p and ``padded`` past its end (cells no path of it reads).
+    the longest length, sequence p in row p and ``PAD`` past its end (cells no path of it reads).
 
     alpha(t, u) sums every way into (t, u); a d = 0 token move stays on frame t, so u runs upwards
     within each frame. Each sequence's figure is exactly what it gives alone: the same operations,
@@ -123,16 +126,6 @@ def transducer_forwards(
     if not endings:
         return [-math.inf] * count
     return [float(score) for score in np.logaddexp.reduce(np.stack(endings), axis=0)]
-
-
-def padded(rows: Sequence[np.ndarray], width: int) -> np.ndarray:
-    """Arrays [T', w_p, ...] stacked into [P, T', width, ...], each filled past its w_p with a
-    log-probability finite (so that the running sums of ``transducer_forwards`` never meet
-    inf - inf) and so low that nothing it reaches counts."""
-    stacked = np.full((len(rows), rows[0].shape[0], width, *rows[0].shape[2:]), _PAD)
-    for index, row in enumerate(rows):
-        stacked[index, :, : row.shape[1]] = row
-    return stacked
 
 
 def rnnt_moves(
