@@ -20,13 +20,13 @@ difference). Measured on whatever machine runs it; figures are printed, nothing 
 import argparse
 import statistics
 import time
-import wave
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from fixtures import recordings
 from fixtures.tts import speak_tts
 from speech_event.grammar import Grammar, load_grammar
 from speech_event.recognizers.sphinx import DEFAULT_GRAMMAR_THRESHOLD, SphinxRecognizer
@@ -34,7 +34,6 @@ from speech_event.recognizers.sphinx import DEFAULT_GRAMMAR_THRESHOLD, SphinxRec
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
 OUT_OF_GRAMMAR = ROOT / "bench" / "data" / "out_of_grammar.txt"
-TESTDATA = Path("/usr/share/pocketsphinx/test/data")
 RATE = 16000
 
 # (expected phrase, or None for speech outside the grammar; audio at 16 kHz)
@@ -62,20 +61,6 @@ def lines(path: Path) -> List[str]:
     return [
         line.strip() for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")
     ]
-
-
-def read_wav(path: Path) -> np.ndarray:
-    with wave.open(str(path)) as wav:
-        return np.frombuffer(wav.readframes(wav.getnframes()), dtype="<i2").astype(np.float32) / 32768
-
-
-def transcriptions(path: Path) -> List[Tuple[str, str]]:
-    """(file id, text) of a pocketsphinx test transcription: ``<s> text </s> (id)`` a line."""
-    result = []
-    for line in path.read_text().splitlines():
-        text, _, file_id = line.rpartition(" (")
-        result.append((file_id.rstrip(")"), text.replace("<s>", "").replace("</s>", "").strip()))
-    return result
 
 
 def judge(recognizer: SphinxRecognizer, samples: Sequence[Sample]) -> Tuple[Tally, float]:
@@ -155,18 +140,11 @@ def tts_set() -> Tuple[Grammar, List[Sample]]:
 
 
 def recorded_set() -> Optional[Tuple[Grammar, List[Sample]]]:
-    cards, librivox = TESTDATA / "cards", TESTDATA / "librivox"
-    if not (cards / "cards.gram").is_file() or not librivox.is_dir():
+    if not recordings.CARDS_GRAMMAR.is_file() or not recordings.LIBRIVOX.is_dir():
         return None
-    samples: List[Sample] = [
-        (text, read_wav(cards / f"{file_id}.wav"))
-        for file_id, text in transcriptions(cards / "cards.transcription")
-    ]
-    samples += [
-        (None, read_wav(librivox / f"{file_id}.wav"))
-        for file_id, _ in transcriptions(librivox / "transcription")
-    ]
-    return load_grammar(cards / "cards.gram"), samples
+    samples: List[Sample] = [(recording.text, recording.samples()) for recording in recordings.cards()]
+    samples += [(None, recording.samples()) for recording in recordings.librivox()]
+    return load_grammar(recordings.CARDS_GRAMMAR), samples
 
 
 def main() -> None:

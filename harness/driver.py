@@ -10,14 +10,15 @@ in-memory bus (tests) and to ROS (scripts/speech_event_driver.py), and a session
 ``audio_storage_dir`` can be played back to the node.
 """
 
+import threading
 import wave
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Optional, Tuple, Union
+from typing import Iterator, Optional, Tuple, Union
 
 import numpy as np
 
-from harness.gate import GateSettings, SpeechGate
+from harness.gate import GateSettings, Piece, SpeechGate
 from speech_event.keyvalue import KeyRule, KeyValueFormat, choice, number, seconds, text
 from speech_event.messages import Float32MultiArray
 from speech_event.pipeline.resample import resample
@@ -109,24 +110,43 @@ def gate_settings(config: DriverConfig) -> GateSettings:
     return GateSettings(config.chunk_size, config.speech_amplitude_threshold, config.utterance_time_buffer)
 
 
-def _publishing(publisher: Publisher, message: object) -> Callable[[], None]:
-    return lambda: publisher.publish(message)
-
-
 def play(
     audio: np.ndarray,
     config: DriverConfig,
     publisher: Publisher,
     clock: Clock,
     gate: Optional[SpeechGate] = None,
+    published: Optional[threading.Event] = None,
 ) -> float:
-    """Schedule each published piece on ``clock`` when its last sample has been 'recorded'; return
-    the end time. ``gate``: another than the amplitude gate of ``config`` (with Silero VAD)."""
+    """Publish each piece on ``clock`` when its last sample has been 'recorded', in order; return
+    the end time. ``gate``: another than the amplitude gate of ``config`` (with Silero VAD);
+    ``published``: set once the last piece is out (a busy machine's timers run late)."""
     start = clock.now()
     gate = gate or SpeechGate(gate_settings(config))
-    for first, piece in gate.feed(audio) + gate.finish():
-        clock.call_at(
-            start + (first + piece.size) / config.sample_rate,
-            _publishing(publisher, Float32MultiArray(data=piece)),
-        )
+    pieces = iter(gate.feed(audio) + gate.finish())
+    _publish_in_turn(pieces, start, config.sample_rate, publisher, clock, published or threading.Event())
     return start + audio.size / config.sample_rate
+
+
+def _publish_in_turn(
+    pieces: Iterator[Piece],
+    start: float,
+    sample_rate: int,
+    publisher: Publisher,
+    clock: Clock,
+    published: threading.Event,
+) -> None:
+    """One timer at a time, each piece's setting the next: on the wall clock every timer is a thread
+    of its own, and threads set all at once ran out of order on a busy machine (blocks 21 ms apart
+    reached the node shuffled, and its texts changed from run to run)."""
+    following = next(pieces, None)
+    if following is None:
+        published.set()
+        return
+    first, piece = following
+
+    def publish() -> None:
+        publisher.publish(Float32MultiArray(data=piece))
+        _publish_in_turn(pieces, start, sample_rate, publisher, clock, published)
+
+    clock.call_at(start + (first + piece.size) / sample_rate, publish)

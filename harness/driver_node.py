@@ -32,6 +32,9 @@ from speech_event.messages import Float32MultiArray
 from speech_event.ports import Clock, Publisher
 
 SUBSCRIBER_TIMEOUT = 30.0
+# --transport memory: the most seconds the node may take, after the source ends, to close the last
+# utterance and to transcribe what is queued.
+SETTLE_TIMEOUT = 60.0
 USAGE_ERROR = 2
 
 
@@ -106,10 +109,16 @@ def _memory(
     )
     node.start()
 
-    def finish() -> None:  # what was said last is transcribed before the process ends
-        time.sleep(node_config.speech_pause_period + 0.2)
+    def finish() -> None:
+        """What was said last is transcribed before the process ends: the pause after it must have
+        closed the utterance (its timer thread may run late on a busy machine), then every queued
+        recognition runs."""
+        deadline = time.monotonic() + node_config.speech_pause_period + SETTLE_TIMEOUT
+        time.sleep(node_config.speech_pause_period)
+        while node.pending_samples and time.monotonic() < deadline:
+            time.sleep(0.05)
         node.stop()
-        executor.shutdown(60.0)
+        executor.shutdown(SETTLE_TIMEOUT)
 
     stack.callback(finish)
     advertise = lambda: bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")  # noqa: E731
@@ -135,7 +144,11 @@ def _play_file(
     path: str, config: DriverConfig, link: Link, clock: Clock, stopped: Callable[[], bool]
 ) -> None:
     audio = read_audio(path, config.sample_rate)
-    _wait_until(clock, play(audio, config, link.up(), clock, _gate(config)) + 0.1, stopped)
+    published = threading.Event()
+    end = play(audio, config, link.up(), clock, _gate(config), published)
+    while not (published.is_set() or stopped()):  # its last pieces come late on a busy machine
+        time.sleep(0.05)
+    _wait_until(clock, end + 0.1, stopped)
 
 
 def _play_scenario(

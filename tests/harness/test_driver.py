@@ -1,9 +1,10 @@
 import os
 import subprocess
 import sys
+import threading
 import wave
 from pathlib import Path
-from typing import List
+from typing import Callable, List, Tuple
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from fixtures.audio import noise, speak_tones
 from harness.driver import DRIVER_FORMAT, AudioFileError, DriverConfig, play, read_audio
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
-from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig, load_config
 from speech_event.errors import ConfigError
@@ -112,6 +113,56 @@ def test_a_recorded_session_played_by_the_driver_is_transcribed_and_silence_is_n
     assert published == ["turn on the light", "thank you"]
     sent = sum(message.data.size for message in blocks)  # type: ignore[attr-defined]
     assert 0 < sent < session.size / 2  # the silence was not published
+
+
+class _LateThreadsClock:
+    """A wall clock on a busy machine: each timer is a thread of its own, and the threads of timers
+    that are due together run in any order (here: the last set runs first)."""
+
+    def __init__(self) -> None:
+        self._now = 0.0
+        self._timers: List[Tuple[float, Callable[[], None], FakeTimer]] = []
+
+    def now(self) -> float:
+        return self._now
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> FakeTimer:
+        timer = FakeTimer(callback)
+        self._timers.append((when, callback, timer))
+        return timer
+
+    def advance_to(self, when: float) -> None:
+        self._now = when
+        while True:
+            due = [entry for entry in self._timers if entry[0] <= when]
+            if not due:
+                return
+            for entry in reversed(due):
+                self._timers.remove(entry)
+                if not entry[2].cancelled:
+                    entry[1]()
+
+
+def test_the_driver_publishes_a_files_blocks_in_order_when_its_timers_run_out_of_order() -> None:
+    """Each block 21 ms after the one before: on a busy machine their timer threads ran late and
+    together, and the node got them shuffled (pocketsphinx's texts changed from run to run)."""
+    rng = np.random.default_rng(7)
+    audio = (0.5 * rng.standard_normal(48000)).astype(np.float32)  # loud throughout: all published
+    clock, sent = _LateThreadsClock(), _Recorder()
+    published = threading.Event()
+    end = play(audio, DriverConfig(), sent, clock, published=published)
+    assert not published.is_set()
+    clock.advance_to(end + 1.0)  # every block due at once, as after a stall
+    assert published.is_set()
+    assert np.array_equal(np.concatenate(sent.blocks), audio)
+
+
+class _Recorder:
+    def __init__(self) -> None:
+        self.blocks: List[np.ndarray] = []
+
+    def publish(self, message: object) -> None:
+        self.blocks.append(np.asarray(message.data))  # type: ignore[attr-defined]
 
 
 def test_a_full_scale_wav_resampled_stays_within_minus_one_to_one(tmp_path: Path) -> None:

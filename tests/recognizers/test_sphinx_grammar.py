@@ -1,13 +1,12 @@
 """pocketsphinx in grammar mode: the phrase said is published, speech outside the grammar is not
 (issue 19), on real recordings (Debian's pocketsphinx-testdata) and the tts voice."""
 
-import wave
-from pathlib import Path
 from typing import Any, Iterator, List, Tuple
 
 import numpy as np
 import pytest
 
+from fixtures import recordings
 from fixtures.tts import speak_tts
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import Grammar, jsgf_grammar, load_grammar, phrases_grammar, requested_grammar
@@ -16,23 +15,6 @@ from speech_event.recognizers.sphinx import DEFAULT_GRAMMAR_THRESHOLD, SphinxRec
 from tests.helpers.paths import ROOT
 
 COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
-TESTDATA = Path("/usr/share/pocketsphinx/test/data")  # Debian's pocketsphinx-testdata
-CARDS = TESTDATA / "cards"
-LIBRIVOX = TESTDATA / "librivox"
-
-
-def _recording(path: Path) -> np.ndarray:
-    with wave.open(str(path)) as wav:
-        return np.frombuffer(wav.readframes(wav.getnframes()), dtype="<i2").astype(np.float32) / 32768
-
-
-def _transcriptions(path: Path) -> List[Tuple[str, str]]:
-    """(file id, text) of a pocketsphinx test transcription: ``<s> text </s> (id)`` a line."""
-    result = []
-    for line in path.read_text().splitlines():
-        text, _, file_id = line.rpartition(" (")
-        result.append((file_id.rstrip(")"), text.replace("<s>", "").replace("</s>", "").strip()))
-    return result
 
 
 def _commands() -> List[str]:
@@ -46,7 +28,7 @@ def commands() -> SphinxRecognizer:
 
 @pytest.fixture(scope="module")
 def cards() -> SphinxRecognizer:
-    return SphinxRecognizer(load_grammar(CARDS / "cards.gram"))
+    return SphinxRecognizer(load_grammar(recordings.CARDS_GRAMMAR))
 
 
 def test_the_engine_takes_grammars(commands: SphinxRecognizer) -> None:
@@ -55,18 +37,18 @@ def test_the_engine_takes_grammars(commands: SphinxRecognizer) -> None:
 
 def test_every_cards_recording_gives_exactly_its_transcription(cards: SphinxRecognizer) -> None:
     # cards.gram has 1.4 million sentences: pocketsphinx searches the JSGF itself
-    expected = _transcriptions(CARDS / "cards.transcription")
-    heard = [(file_id, cards.transcribe(_recording(CARDS / f"{file_id}.wav"))) for file_id, _ in expected]
-    assert heard == [(file_id, Transcript(text)) for file_id, text in expected]
+    expected = recordings.cards()
+    heard = [(recording.name, cards.transcribe(recording.samples())) for recording in expected]
+    assert heard == [(recording.name, Transcript(recording.text)) for recording in expected]
 
 
 def test_every_librivox_recording_is_rejected_naming_the_nearest_cards(cards: SphinxRecognizer) -> None:
-    file_ids = [file_id for file_id, _ in _transcriptions(LIBRIVOX / "transcription")]
-    assert len(file_ids) == 5
-    for file_id in file_ids:
-        transcript = cards.transcribe(_recording(LIBRIVOX / f"{file_id}.wav"))
+    librivox = recordings.librivox()
+    assert len(librivox) == 5
+    for recording in librivox:
+        transcript = cards.transcribe(recording.samples())
         assert transcript.text == ""
-        assert transcript.rejected, file_id
+        assert transcript.rejected, recording.name
         assert cards.last_ratio is not None and cards.last_ratio < DEFAULT_GRAMMAR_THRESHOLD
 
 
