@@ -3,6 +3,7 @@
 import argparse
 import dataclasses
 import logging
+import math
 import signal
 import sys
 import time
@@ -16,6 +17,7 @@ from harness.outcome import Outcome
 from harness.processes import ReplayError
 from harness.replay_storage import replay_storage
 from harness.report import passed, report
+from harness.ros.schedule import TEXT_DEADLINE
 from harness.scenario import Say, Scenario, ScenarioError, load_scenario
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
@@ -40,6 +42,16 @@ def _terminate(signum: int, frame: object) -> None:
     raise Terminated
 
 
+def _positive_seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not seconds > 0 or math.isinf(seconds):
+        raise argparse.ArgumentTypeError(f"{text!r}: a number of seconds above 0")
+    return seconds
+
+
 def _base_config(path: Optional[str]) -> SpeechEventConfig:
     return load_config(path) if path else SpeechEventConfig()
 
@@ -50,7 +62,13 @@ def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scena
         return run_in_memory
     from harness.ros.runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
 
-    options = RosOptions(arguments.real_time, arguments.node_command, arguments.config, arguments.config_dir)
+    options = RosOptions(
+        arguments.real_time,
+        arguments.node_command,
+        arguments.config,
+        arguments.config_dir,
+        arguments.text_deadline,
+    )
     replay = RosReplay(stack, options)
     return replay.play
 
@@ -173,6 +191,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     run.add_argument(
         "--config-dir",
         help="ros: write the node's configuration file here (a folder a node on another host can read)",
+    )
+    run.add_argument(
+        "--text-deadline",
+        type=_positive_seconds,
+        default=TEXT_DEADLINE,
+        metavar="SECONDS",
+        help="ros: wait at most this long for each text the node is expected to publish "
+        f"(default {TEXT_DEADLINE:.0f})",
     )
     run.set_defaults(handler=_run)
     demo = commands.add_parser("demo", help="speech in, text out: the node on the in-memory bus")

@@ -35,6 +35,9 @@ class Outcome:
     # In memory: each time one of the node's own timers fired (health checks, utterance ends by
     # whatever rule ended them, goal deadlines, ...). A ROS replay stops its clock at each.
     node_timers: List[float] = field(default_factory=list)
+    # A ROS replay: each wait for what the node published in memory that ran out, saying how long
+    # it waited and for what (a failing scenario's report shows them).
+    gave_up: List[str] = field(default_factory=list)
 
 
 def result_text(state: str, transcription: str) -> str:

@@ -97,6 +97,7 @@ def report(scenario: Scenario, outcome: Outcome, hint: Optional[str] = None) -> 
     lines.extend(_timed("published", outcome.published))
     if outcome.results:
         lines.extend(_timed("action results", outcome.results))
+    lines.extend(f"      gave up: {wait}" for wait in outcome.gave_up)
     if hint:
         lines.append(f"      note: {hint}")
     return "\n".join(lines)

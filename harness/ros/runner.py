@@ -38,7 +38,7 @@ from harness.catalog import engine_for
 from harness.outcome import REAL_TIME, SIM_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
-from harness.ros.schedule import TEXT_WAIT, TIMER_SETTLE, Schedule, scenario_start
+from harness.ros.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, Schedule, scenario_start
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
 from harness.timeline import SendGoal, build_timeline
@@ -85,6 +85,8 @@ class RosOptions:
     base_config: Optional[str] = None
     # Where the node's configuration file is written (a folder a node on another host can read).
     config_dir: Optional[str] = None
+    # The most seconds to wait for a text the node published by then in memory (schedule.py).
+    text_deadline: float = TEXT_DEADLINE
 
 
 def route_address(master_uri: str) -> str:
@@ -192,14 +194,19 @@ class RosReplay:
         In real time waiting would shift the events after it, so it waits only at the end."""
         if self._options.real_time and not final:
             return
-        texts, results, partials = self._schedule.due(self._now, played)
-        deadline = time.monotonic() + TEXT_WAIT
-        while time.monotonic() < deadline and (
-            len(self._outcome.published) < texts
-            or len(self._outcome.results) < results
-            or len(self._outcome.partials) < partials
-        ):
+        due = self._schedule.due(self._now, played)
+        if self._options.real_time:  # when a partial comes decides what it says: not compared
+            due = dataclasses.replace(due, partials=0)
+        patience = TEXT_WAIT_AFTER_MISS if self._outcome.gave_up else self._options.text_deadline
+        began = time.monotonic()
+        while due.missing(self._outcome) and time.monotonic() < began + patience:
             time.sleep(0.002)
+        missing = due.missing(self._outcome)
+        if missing:
+            self._outcome.gave_up.append(
+                f"at t={self._scenario_time():.3f} s, waited {time.monotonic() - began:.1f} s for {missing} "
+                "that the node published by then in memory"
+            )
 
     def call(self, service: str, request: object) -> None:
         ros_service = generated_class(SERVICES[service].name, "srv")

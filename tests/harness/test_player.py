@@ -1,10 +1,13 @@
 """The one walk over a timeline (harness/player.py), and the node's own times the in-memory run notes
-for the ROS replay's schedule (harness/ros/schedule.py)."""
+for the ROS replay's schedule (harness/ros/schedule.py), and what a replay waits for there."""
 
 from typing import List
 
 from harness.memory_runner import run_in_memory
+from harness.outcome import SIM_TIME, Outcome, Published
 from harness.player import play
+from harness.report import report
+from harness.ros.schedule import Due, Schedule
 from harness.scenario import Say, Scenario, Silence
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event.config import SpeechEventConfig
@@ -94,3 +97,26 @@ def test_the_in_memory_run_notes_the_nodes_own_times_its_checks_and_the_utteranc
     assert last_block + config.speech_pause_period in outcome.node_timers  # the pause ended it
     assert last_block + config.speculation_gap in outcome.node_timers  # the node speculated
     assert config.health_check_period in outcome.node_timers
+
+
+def test_a_replay_says_what_it_still_waits_for_and_a_failing_report_shows_each_wait_it_gave_up() -> None:
+    config = SpeechEventConfig()
+    scenario = Scenario("one", "one", config, (Say("go"), Silence(4.0)), ("go",), voice="tones")
+    schedule = Schedule.of(scenario)
+    end = schedule.rehearsal.published[0].time
+    assert schedule.due(end - 0.001, 10**6) == Due(texts=0, results=0, partials=1)  # 'go' so far
+    due = schedule.due(end, 10**6)
+    assert due == Due(texts=1, results=0, partials=1)
+    observed = Outcome(clock=SIM_TIME)
+    assert due.missing(observed) == "1 text(s), 1 partial text(s)"
+    assert Due(2, 1, 3).missing(observed) == "2 text(s), 1 action result(s), 3 partial text(s)"
+    observed.gave_up.append(
+        "at t=4.500 s, waited 30.0 s for 1 text(s) that the node published by then in memory"
+    )
+    assert report(scenario, observed).splitlines()[-2:] == [
+        "      published, with scenario times:",
+        "      gave up: at t=4.500 s, waited 30.0 s for 1 text(s) that the node published by then in memory",
+    ]
+    observed.published.append(Published(4.6, "go"))
+    observed.partials.append(Published(2.5, "go"))
+    assert due.missing(observed) == ""

@@ -78,6 +78,40 @@ def test_a_failing_scenario_on_ros_shows_its_diff_and_exits_1(tmp_path: Path) ->
     assert "        t=   2.012 s  'go left'\n" in result.stdout  # as in memory: sim time is exact
 
 
+def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_the_replay_waited(tmp_path: Path) -> None:
+    """The replay waits for an expected text until it comes or the deadline passes (a fixed second
+    failed CI on a busy machine); here the node under test never publishes it."""
+    silent = tmp_path / "silent_node.py"
+    silent.write_text(
+        "import sys\n"
+        "from speech_event.pipeline.publication import Publication\n"
+        "Publication.conclude = lambda self, job, outcome: None  # recognizes, publishes nothing\n"
+        "from speech_event.application import main\n"
+        "sys.exit(main(['-c', sys.argv[1], '--recognizer', 'fake']))\n"
+    )
+    began = time.monotonic()
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        f"{sys.executable} {silent} {{config}}",
+        "--text-deadline",
+        "3",
+        "scenarios/single_utterance.toml",
+    )
+    assert result.returncode == 1
+    lines = result.stdout.splitlines()
+    gave_up = [line.strip() for line in lines if line.strip().startswith("gave up:")]
+    assert gave_up[0] == (
+        "gave up: at t=2.524 s, waited 3.0 s for 1 text(s) that the node published by then in memory"
+    ), result.stdout
+    # the scenario is failed already: its later waits are short
+    assert [line.split(", ")[1] for line in gave_up[1:]] == [
+        "waited 1.0 s for 1 text(s) that the node published by then in memory"
+    ] * (len(gave_up) - 1)
+    assert lines[-1] == "0 passed, 1 failed"
+    assert time.monotonic() - began < 60  # the later waits of a scenario that missed one are short
+
+
 def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) -> None:
     marker = tmp_path / "ran"
     wrapper = tmp_path / "other_node.py"
