@@ -97,7 +97,10 @@ def report(scenario: Scenario, outcome: Outcome, hint: Optional[str] = None) -> 
     lines.extend(_timed("published", outcome.published))
     if outcome.results:
         lines.extend(_timed("action results", outcome.results))
-    lines.extend(f"      gave up: {wait}" for wait in outcome.gave_up)
+    for wait in outcome.gave_up:
+        first, *more = wait.splitlines()
+        lines.append(f"      gave up: {first}")
+        lines.extend(f"        {line}" for line in more)
     if hint:
         lines.append(f"      note: {hint}")
     return "\n".join(lines)

@@ -203,9 +203,15 @@ class RosReplay:
             time.sleep(0.002)
         missing = due.missing(self._outcome)
         if missing:
+            waited = time.monotonic() - began
+            said = (
+                ""
+                if self._outcome.gave_up
+                else "; the node's last lines:\n" + self.processes.last_lines("node")
+            )
             self._outcome.gave_up.append(
-                f"at t={self._scenario_time():.3f} s, waited {time.monotonic() - began:.1f} s for {missing} "
-                "that the node published by then in memory"
+                f"at t={self._scenario_time():.3f} s, waited {waited:.1f} s for {missing} "
+                f"that the node published by then in memory{said}"
             )
 
     def call(self, service: str, request: object) -> None:
