@@ -23,20 +23,6 @@ pytest_add_cli_args_test_selection = [$tests]
 TOML
 cd "$scratch"
 XDG_CACHE_HOME="$scratch/cache" "$mutmut" run --max-children 2 > mutmut.log 2>&1
-"$mutmut" results --all true 2>/dev/null | "$python" -c '
-import collections, sys
-counts = collections.defaultdict(collections.Counter)
-for line in sys.stdin:
-    name, _, status = line.strip().rpartition(":")
-    if "__mutmut_" in name:
-        parts = name.split(".")
-        module = ".".join(parts[: next(i for i, part in enumerate(parts) if "__mutmut_" in part)])
-        counts[module][status.strip()] += 1
-killed = total = 0
-for module, count in sorted(counts.items()):
-    killed, total = killed + count["killed"], total + sum(count.values())
-    print(f"{module}: {count[\"killed\"]}/{sum(count.values())} killed {dict(count)}")
-print(f"overall: {killed}/{total} = {100 * killed / total:.1f} %")
-'
+"$mutmut" results --all true 2>/dev/null | "$python" "$checkout/bench/mutation_report.py"
 echo "survivors:"
 "$mutmut" results 2>/dev/null

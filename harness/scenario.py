@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
 from harness.catalog import FIXTURE_PREFIX, RECOGNIZERS, VOICES
-from speech_event.config import PATH_KEYS, SpeechEventConfig, apply_overrides, load_config
+from speech_event.config import SpeechEventConfig, apply_overrides, load_config, names_a_file
 from speech_event.errors import ConfigError
 
 if sys.version_info >= (3, 11):
@@ -242,11 +242,10 @@ def _step(table: Any, where: str) -> Step:
 
 def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEventConfig) -> Scenario:
     top = _Reader(document, source, _TOP_KEYS)
-    overrides = dict(top.get("config", dict, {}))
-    for key in PATH_KEYS:  # a scenario's files are found next to it, wherever it is run from
-        value = overrides.get(key)
-        if isinstance(value, str) and value and not value.startswith(FIXTURE_PREFIX):
-            overrides[key] = str(Path(source).parent / overrides[key])
+    overrides = {
+        spelling: _from_folder(spelling, value, source)
+        for spelling, value in top.get("config", dict, {}).items()
+    }
     try:
         config = apply_overrides(base_config, overrides, source + ": [config]")
     except ConfigError as config_error:
@@ -311,6 +310,15 @@ def _transcript(table: Mapping[str, Any], where: str) -> Mapping[str, Any]:
     for key in ("text", "final"):
         reader.get(key, TRANSCRIPT_FIELDS[key])  # required
     return {key: reader.get(key, kind) for key, kind in TRANSCRIPT_FIELDS.items() if key in table}
+
+
+def _from_folder(spelling: str, value: object, source: str) -> object:
+    """A [config] value, a relative path taken from the scenario's folder when its key names a
+    file, in any spelling (camelCase, pocketsphinx_grammar): a scenario's files are found next to
+    it, wherever it is run from. ``fixture:`` models are built at test time."""
+    if names_a_file(spelling) and isinstance(value, str) and value and not value.startswith(FIXTURE_PREFIX):
+        return str(Path(source).parent / value)
+    return value
 
 
 def _next_to(step: Step, source: str) -> Step:

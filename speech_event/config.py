@@ -11,7 +11,17 @@ from pathlib import Path
 from typing import Mapping, Optional, Union
 
 from speech_event.errors import ConfigError
-from speech_event.keyvalue import KeyRule, KeyValueFormat, boolean, choice, number, optional, seconds, text
+from speech_event.keyvalue import (
+    KeyRule,
+    KeyValueFormat,
+    boolean,
+    choice,
+    file_path,
+    number,
+    optional,
+    seconds,
+    text,
+)
 
 __all__ = [
     "ConfigError",
@@ -133,24 +143,14 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
     return None
 
 
-# Keys that name files; a scenario's relative paths are taken from the scenario's folder.
-PATH_KEYS = (
-    "rw_model_path",
-    "en_model_path",
-    "audio_storage_dir",
-    "grammar",
-    "pocketsphinx_keywords",
-)
-
-
 _FORMAT = KeyValueFormat(
     SpeechEventConfig,
     {
         "language": KeyRule(choice("kinyarwanda", "english"), "kinyarwanda or english"),
         "verbose_mode": KeyRule(boolean, "true or false"),
-        "rw_model_path": KeyRule(text, "a path"),
-        "en_model_path": KeyRule(text, "a path"),
-        "audio_storage_dir": KeyRule(text, "a directory path, or nothing to store no audio"),
+        "rw_model_path": file_path("a path"),
+        "en_model_path": file_path("a path"),
+        "audio_storage_dir": file_path("a directory path, or nothing to store no audio"),
         "audio_storage_max_mb": KeyRule(number(float, 1.0, 10.0**7), "a number of MiB, 1 or more"),
         "cuda": KeyRule(boolean, "true or false"),
         "quantization": KeyRule(choice(*QUANTIZATIONS), " or ".join(QUANTIZATIONS)),
@@ -163,12 +163,12 @@ _FORMAT = KeyValueFormat(
         "max_message_length": seconds(0.1, 3600.0),
         "confidence": KeyRule(number(float, 0.0, 1.0), "a number from 0 to 1"),
         "heartbeat_msg_period": seconds(0.0, 3600.0),
-        "grammar": KeyRule(text, "a JSGF file or a file of phrases, one a line; empty: free speech"),
+        "grammar": file_path("a JSGF file or a file of phrases, one a line; empty: free speech"),
         "grammar_threshold": KeyRule(
             optional(number(float, -(10.0**6), 0.0)),
             "a log-likelihood ratio, 0 or less, or nothing for the engine's default",
         ),
-        "pocketsphinx_keywords": KeyRule(text, "a keyword list file (pocketsphinx kws format); empty: none"),
+        "pocketsphinx_keywords": file_path("a keyword list file (pocketsphinx kws format); empty: none"),
         "model": KeyRule(choice(*MODEL_FAMILIES), " or ".join(MODEL_FAMILIES)),
         "min_utterance_length": seconds(0.0, 300.0),
         "vad_threshold": KeyRule(number(float, 0.0, 1.0), "a speech probability from 0 to 1; 0: no check"),
@@ -190,6 +190,14 @@ _FORMAT = KeyValueFormat(
     },
     check=_together,
 )
+# The keys that name files (file_path above); a scenario takes relative ones from its own folder.
+PATH_KEYS = _FORMAT.path_keys
+
+
+def names_a_file(spelling: str) -> bool:
+    """Whether a key as a file or a scenario may spell it (its camelCase, an alias such as
+    pocketsphinx_grammar) names a file."""
+    return _FORMAT.names_a_file(spelling)
 
 
 def parse_config(content: str, source: str = "<config>") -> SpeechEventConfig:

@@ -10,7 +10,7 @@ import dataclasses
 import difflib
 import re
 from pathlib import Path
-from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Optional, Type, TypeVar, Union
+from typing import Any, Callable, Dict, Generic, Mapping, NamedTuple, Optional, Tuple, Type, TypeVar, Union
 
 from speech_event.errors import ConfigError
 
@@ -23,6 +23,8 @@ class KeyRule(NamedTuple):
 
     parse: Callable[[object], object]
     allowed: str
+    # The value names a file: a scenario takes a relative one from its own folder.
+    path: bool = False
 
 
 def text(value: object) -> str:
@@ -93,6 +95,11 @@ def seconds(low: float, high: float) -> KeyRule:
     return KeyRule(number(float, low, high), f"a number of seconds from {low} to {high}")
 
 
+def file_path(allowed: str) -> KeyRule:
+    """The rule of a key whose value is a file's path, as text."""
+    return KeyRule(text, allowed, path=True)
+
+
 def _camel_case(key: str) -> str:
     return re.sub(r"_([a-z])", lambda match: match.group(1).upper(), key)
 
@@ -127,6 +134,16 @@ class KeyValueFormat(Generic[Config]):
         for alias, key in (aliases or {}).items():
             assert key in rules, f"alias {alias} of unknown key {key}"
             self._spellings[alias] = key
+
+    @property
+    def path_keys(self) -> Tuple[str, ...]:
+        """The keys whose values name files."""
+        return tuple(key for key, rule in self._rules.items() if rule.path)
+
+    def names_a_file(self, spelling: str) -> bool:
+        """Whether ``spelling`` (a key, its camelCase or an alias) sets a key that names a file."""
+        key = self._spellings.get(spelling)
+        return key is not None and self._rules[key].path
 
     def _unknown_key(self, where: str, key: str) -> ConfigError:
         close = difflib.get_close_matches(key, list(self._spellings), n=1, cutoff=0.6)

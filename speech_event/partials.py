@@ -28,6 +28,7 @@ from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
 from speech_event.pipeline.recognition_queue import RecognitionOutcome
 from speech_event.pipeline.resample import StreamResampler
+from speech_event.pipeline.transcript import proper_transcript
 from speech_event.ports import (
     TIMER_TOLERANCE,
     Audio,
@@ -188,12 +189,13 @@ class PartialRules:
         return self.feed.fed if self.feed is not None else self._covered
 
     def _new_text(self, answer: object) -> Optional[Transcript]:
-        if not isinstance(answer, Transcript) or not isinstance(answer.text, str):
+        transcript = proper_transcript(answer)
+        if transcript is None:
             return None  # a failed or stopped run: its final recognition will say why
-        text = answer.text.strip()
-        confident = answer.confidence is None or answer.confidence >= self._confidence
+        text = transcript.text.strip()
+        confident = transcript.confidence is None or transcript.confidence >= self._confidence
         if not text or not confident or text == self._last_text:
             return None
         self._last_text = text
         self.counts.published += 1
-        return Transcript(text, answer.confidence)
+        return Transcript(text, transcript.confidence)

@@ -19,7 +19,8 @@ from typing import FrozenSet, Optional
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
-from speech_event.ports import Cancellable, Recognizer, Stoppable, Timer, Transcript
+from speech_event.pipeline.transcript import proper_transcript
+from speech_event.ports import Cancellable, Recognizer, Stoppable, Timer
 
 
 @dataclass
@@ -149,8 +150,8 @@ class SpeculationRules:
         the speculation before it on this utterance."""
         if speculation.cancelled or speculation.adopted is not None or speculation.outcome is None:
             return False
-        answer = speculation.outcome.answer
-        text = answer.text if isinstance(answer, Transcript) else ""
+        transcript = proper_transcript(speculation.outcome.answer)  # None: a failed recognition
+        text = transcript.text if transcript is not None else ""
         complete = is_complete(text, self._last_text, speculation.grammar is not None, self._answers)
         self._last_text = text.strip().lower()  # as is_complete compares it
         return complete

@@ -1,5 +1,6 @@
 """Recognizers that answer nonsense, fail hard, hang or cannot keep up: handled, bounded, visible."""
 
+import dataclasses
 import logging
 import threading
 from typing import List
@@ -9,7 +10,9 @@ import pytest
 
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.config import SpeechEventConfig
+from speech_event.messages import String
 from speech_event.ports import Transcript
+from speech_event.topics import PARTIAL_TOPIC
 from tests.helpers.fakes import SpyRecognizer
 from tests.helpers.rig import Rig
 
@@ -74,6 +77,45 @@ def test_a_nan_confidence_counts_as_none_reported_and_the_text_is_published(
     assert [r.getMessage() for r in caplog.records] == [
         "utterance 1: the engine reported confidence NaN; taken as no confidence reported"
     ]
+
+
+class StoppableAnswering(Answering):
+    """Answers as Answering does, and can be stopped: the node speculates and asks it for partial
+    texts."""
+
+    def stop(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        None,
+        Transcript(None),  # type: ignore[arg-type]
+        Transcript(5),  # type: ignore[arg-type]
+        # "yes" is a complete answer, so a speculation taking it ends the turn early.
+        Transcript("yes", 1.5),
+        Transcript("yes", "high"),  # type: ignore[arg-type]
+    ],
+)
+def test_a_speculation_takes_an_answer_that_is_no_proper_transcript_as_the_final_recognition_does(
+    answer: object, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A failed recognition: no complete answer (the whole pause is waited for), no partial text,
+    no exception in the speculation's job; the final recognition adopts it and says why it failed."""
+    rig = Rig(dataclasses.replace(UNRECOGNIZED, early_pause=0.5), StoppableAnswering(answer))
+    partials: List[str] = []
+    rig.bus.subscribe(PARTIAL_TOPIC, String, lambda message: partials.append(message.data))  # type: ignore[attr-defined]
+    with caplog.at_level(logging.WARNING, logger="speech_event"):
+        rig.speak(HALF_SECOND)  # its last block at 0.512 s
+        rig.clock.advance(2.0)
+    assert [(round(time, 3), text) for time, text in rig.published] == [
+        (2.012, "Error: speech not recognized")
+    ]
+    assert partials == []
+    assert (rig.node.speculations.started, rig.node.speculations.used) == (1, 1)
+    (record,) = caplog.records
+    assert record.getMessage() == "recognition of utterance 1 (0.50 s) failed"
 
 
 class Exiting(SpyRecognizer):

@@ -3,7 +3,7 @@
 import logging
 import math
 import numbers
-from typing import Optional
+from typing import Optional, Union
 
 from speech_event.config import SpeechEventConfig
 from speech_event.ports import Transcript
@@ -18,21 +18,38 @@ def checked_transcript(result: object, number: int) -> Transcript:
     A NaN confidence counts as none reported (the text is published, with a warning): an engine
     that cannot score must not silently lose what it heard.
     """
+    judged = _judged(result)
+    if isinstance(judged, str):
+        raise ValueError(judged)
+    if judged is not result:
+        _LOG.warning(
+            "utterance %d: the engine reported confidence NaN; taken as no confidence reported", number
+        )
+    return judged
+
+
+def proper_transcript(result: object) -> Optional[Transcript]:
+    """The engine's answer as ``checked_transcript`` takes it, or None where that fails, without a
+    word: speculations and partial texts judge answers by it, so a broken engine's answer is a
+    failed recognition there too (never a complete answer, never an exception), and the final
+    recognition alone says why."""
+    judged = _judged(result)
+    return None if isinstance(judged, str) else judged
+
+
+def _judged(result: object) -> Union[Transcript, str]:
+    """The transcript to take from an engine's answer (itself, or without a NaN confidence), or
+    why it is none."""
     if not isinstance(result, Transcript) or not isinstance(result.text, str):
-        raise ValueError(f"the engine answered {result!r}, not a Transcript with text")
+        return f"the engine answered {result!r}, not a Transcript with text"
     confidence = result.confidence
     if confidence is None:
         return result
     real = isinstance(confidence, numbers.Real) and not isinstance(confidence, bool)
     if real and math.isnan(float(confidence)):
-        _LOG.warning(
-            "utterance %d: the engine reported confidence NaN; taken as no confidence reported", number
-        )
         return Transcript(result.text)
     if not real or not 0 <= float(confidence) <= 1:
-        raise ValueError(
-            f"the engine reported confidence {confidence!r}; allowed: a number from 0 to 1 or none"
-        )
+        return f"the engine reported confidence {confidence!r}; allowed: a number from 0 to 1 or none"
     return result
 
 

@@ -90,6 +90,38 @@ def test_a_bad_scenario_is_refused_with_where_and_what_is_allowed(
     assert str(error.value) == message
 
 
+@pytest.mark.parametrize("spelling", ["grammar", "pocketsphinx_grammar"])
+def test_a_grammar_in_config_is_read_next_to_the_scenario_under_its_old_name_too(
+    spelling: str, tmp_path: Path
+) -> None:
+    (tmp_path / "commands.txt").write_text("go left\nstop\n")
+    path = tmp_path / "s.toml"
+    path.write_text(
+        f'name = "n"\n[config]\n{spelling} = "commands.txt"\n'
+        '[[steps]]\nsay = "go right"\n[[steps]]\nsilence = 2.0\n[[steps]]\nsay = "go left"\n'
+        '[expect]\npublished = ["go left"]\n'
+    )
+    scenario = load_scenario(path, SpeechEventConfig())
+    outcome = run_in_memory(scenario)
+    assert [message.text for message in outcome.published] == ["go left"]  # "go right": no phrase
+    assert passed(scenario, outcome)
+
+
+@pytest.mark.parametrize(
+    ("spelling", "key"),
+    [
+        ("rwModelPath", "rw_model_path"),
+        ("enModelPath", "en_model_path"),
+        ("audioStorageDir", "audio_storage_dir"),
+        ("pocketsphinxKeywords", "pocketsphinx_keywords"),
+        ("pocketsphinx_grammar", "grammar"),
+    ],
+)
+def test_every_spelling_of_a_path_key_is_taken_from_the_scenarios_folder(spelling: str, key: str) -> None:
+    scenario = parse_scenario({**MINIMAL, "config": {spelling: "data/x"}}, "/s/t.toml", SpeechEventConfig())
+    assert getattr(scenario.config, key) == "/s/data/x"
+
+
 def _harness(*arguments: str) -> "subprocess.CompletedProcess[str]":
     return subprocess.run(
         [sys.executable, "-m", "harness", *arguments], cwd=ROOT, capture_output=True, text=True

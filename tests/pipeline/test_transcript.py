@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from speech_event.config import SpeechEventConfig
-from speech_event.pipeline.transcript import checked_transcript, text_to_publish
+from speech_event.pipeline.transcript import checked_transcript, proper_transcript, text_to_publish
 from speech_event.ports import Transcript
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
 
@@ -57,6 +57,29 @@ def test_a_nan_confidence_keeps_the_text_as_unscored_with_a_warning(
     assert [(record.levelno, record.getMessage()) for record in caplog.records] == [
         (logging.WARNING, "utterance 7: the engine reported confidence NaN; taken as no confidence reported")
     ]
+
+
+@pytest.mark.parametrize(
+    ("answer", "taken"),
+    [
+        (Transcript("go", 0.5), Transcript("go", 0.5)),
+        (Transcript("go", 0.0), Transcript("go", 0.0)),  # both ends of [0, 1] are confidences
+        (Transcript("go", 1.0), Transcript("go", 1.0)),
+        (Transcript("", rejected="stop"), Transcript("", rejected="stop")),
+        (Transcript("go", math.nan), Transcript("go")),
+        (None, None),
+        ("go", None),
+        (Transcript(None), None),  # type: ignore[arg-type]
+        (Transcript("go", 1.5), None),
+        (Transcript("go", "high"), None),  # type: ignore[arg-type]
+    ],
+)
+def test_speculations_and_partials_take_an_answer_as_the_final_recognition_does_without_a_word(
+    answer: object, taken: Optional[Transcript], caplog: pytest.LogCaptureFixture
+) -> None:
+    with caplog.at_level(logging.DEBUG, logger="speech_event"):
+        assert proper_transcript(answer) == taken
+    assert caplog.records == []
 
 
 def test_the_published_text_is_stripped() -> None:
