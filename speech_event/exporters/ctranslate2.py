@@ -104,10 +104,10 @@ class _Cursor:
 
     def __init__(self, path: Path, data: bytes) -> None:
         self.path = path
-        self.data = data
+        self.data = memoryview(data)  # slices of it share the file's bytes: no copy of the weights
         self.offset = 0
 
-    def take(self, size: int, what: str) -> bytes:
+    def take(self, size: int, what: str) -> memoryview:
         end = self.offset + size
         if end > len(self.data):
             raise ModelError(
@@ -119,16 +119,16 @@ class _Cursor:
         return piece
 
     def number(self, code: str, what: str) -> int:
-        value: int = struct.unpack("<" + code, self.take(struct.calcsize(code), what))[0]
+        value: int = struct.unpack_from("<" + code, self.take(struct.calcsize(code), what))[0]
         return value
 
     def string(self, what: str) -> str:
         size = self.number("H", what)
         raw = self.take(size, what)
-        if size == 0 or raw[-1:] != b"\0":
+        if size == 0 or raw[-1] != 0:
             raise ModelError(f"{self.path}: {what} at byte {self.offset - size} does not end in a NUL byte")
         try:
-            return raw[:-1].decode("utf-8")
+            return bytes(raw[:-1]).decode("utf-8")
         except UnicodeDecodeError:
             raise ModelError(f"{self.path}: {what} at byte {self.offset - size} is not UTF-8") from None
 
