@@ -16,11 +16,12 @@ torch.onnx writes it, a pattern onnxruntime fuses into one kernel.
 
 The token embedding is one initializer, stored transposed [width, vocabulary]: the logits' MatMul
 reads it as a weight (so the int8 version quantizes it), and the embedding of the tokens gathers
-its columns.
+its columns. ``share_transposed_embedding`` does the same to a decoder that holds the embedding
+twice (torch.onnx folds the transpose the logits read into a second copy).
 """
 
 from dataclasses import dataclass
-from typing import Any, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import onnx
@@ -356,3 +357,50 @@ def decoder_graph(weights: WhisperWeights) -> onnx.ModelProto:
             ("new_self_v", TensorProto.FLOAT, grown),
         ],
     )
+
+
+def _embeds_tokens(node: onnx.NodeProto, graph: onnx.GraphProto, matrices: Dict[str, np.ndarray]) -> bool:
+    """Whether ``node`` is the embedding of the graph's tokens: a Gather of the rows of a matrix
+    (an initializer) that nothing else reads."""
+    return (
+        node.op_type == "Gather"
+        and list(node.input[1:]) == ["tokens"]
+        and node.input[0] in matrices
+        and all(attribute.i == 0 for attribute in node.attribute if attribute.name == "axis")
+        and sum(list(other.input).count(node.input[0]) for other in graph.node) == 1
+    )
+
+
+def share_transposed_embedding(model: onnx.ModelProto) -> int:
+    """Store the token embedding once in a decoder that holds it twice: the embedding [vocabulary,
+    width] that a Gather reads the graph's ``tokens`` from, and its exact transpose (the logits'
+    weight). The Gather becomes the tied lookup of the transposed copy and the embedding goes.
+    Returns the bytes saved: 0 when the decoder has no such pair."""
+    graph = model.graph
+    matrices = {
+        tensor.name: numpy_helper.to_array(tensor) for tensor in graph.initializer if len(tensor.dims) == 2
+    }
+    for position, node in enumerate(graph.node):
+        if not _embeds_tokens(node, graph, matrices):
+            continue
+        transposed = matrices[node.input[0]].T
+        twin = next(
+            (
+                name
+                for name, matrix in matrices.items()
+                if matrix.shape == transposed.shape and np.array_equal(matrix, transposed)
+            ),
+            None,
+        )
+        if twin is None:
+            return 0
+        embedding = node.input[0]
+        lookup = tied_lookup(twin, "tokens", node.output[0])
+        del graph.node[position]
+        for offset, new in enumerate(lookup):
+            graph.node.insert(position + offset, new)
+        kept = [tensor for tensor in graph.initializer if tensor.name != embedding]
+        del graph.initializer[:]
+        graph.initializer.extend(kept)
+        return int(transposed.nbytes)
+    return 0

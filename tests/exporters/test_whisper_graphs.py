@@ -1,5 +1,6 @@
 """The Whisper graphs built from numpy weights (speech_event/exporters/whisper_graphs.py), on the
-small random Whisper of fixtures/ct2_whisper_model.py: the token embedding stored once, and the
+small random Whisper of fixtures/ct2_whisper_model.py: the token embedding stored once, a decoder
+holding it twice (as torch.onnx writes it) brought to once with the same logits, and the
 decoder's cache giving what one pass over all the tokens gives."""
 
 from pathlib import Path
@@ -9,6 +10,7 @@ import numpy as np
 import onnx
 import onnxruntime
 import pytest
+from onnx import helper, numpy_helper
 
 from fixtures.ct2_whisper_model import LAYERS, VOCABULARY, WIDTH, write_whisper_directory
 from speech_event.exporters.faster_whisper import read_faster_whisper
@@ -17,6 +19,7 @@ from speech_event.exporters.whisper_graphs import (
     WhisperWeights,
     decoder_graph,
     encoder_graph,
+    share_transposed_embedding,
 )
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.model import cross_names
@@ -62,6 +65,27 @@ def _logits(model: onnx.ModelProto, cross: Dict[str, np.ndarray], steps: List[Li
     return np.concatenate(rows)
 
 
+def _untied(model: onnx.ModelProto) -> onnx.ModelProto:
+    """The decoder as torch.onnx writes it: the embedding gathered by rows from a copy of its own."""
+    untied = onnx.ModelProto()
+    untied.CopyFrom(model)
+    graph = untied.graph
+    table = next(tensor for tensor in graph.initializer if tensor.name == TIED_EMBEDDING)
+    graph.initializer.append(
+        numpy_helper.from_array(numpy_helper.to_array(table).T.copy(), "embedding.weight")
+    )
+    lookup = [
+        index
+        for index, node in enumerate(graph.node)
+        if node.input[:1] == [TIED_EMBEDDING] and node.op_type == "Gather"
+    ]
+    assert len(lookup) == 1
+    output = graph.node[lookup[0] + 1].output[0]  # the lookup's Transpose
+    del graph.node[lookup[0] : lookup[0] + 2]
+    graph.node.insert(lookup[0], helper.make_node("Gather", ["embedding.weight", "tokens"], [output]))
+    return untied
+
+
 def test_the_decoder_stores_the_token_embedding_once_and_the_logits_read_it(weights: WhisperWeights) -> None:
     model = decoder_graph(weights)
     assert _embeddings(model) == [TIED_EMBEDDING]
@@ -69,6 +93,25 @@ def test_the_decoder_stores_the_token_embedding_once_and_the_logits_read_it(weig
     assert readers == ["Gather", "MatMul"]
     logits = next(node for node in model.graph.node if node.output[0] == "logits")
     assert (logits.op_type, logits.input[1]) == ("MatMul", TIED_EMBEDDING)
+
+
+def test_a_decoder_holding_the_embedding_twice_gets_it_once_with_the_same_logits(
+    weights: WhisperWeights, cross: Dict[str, np.ndarray]
+) -> None:
+    untied = _untied(decoder_graph(weights))
+    assert _embeddings(untied) == [TIED_EMBEDDING, "embedding.weight"]
+    before = _logits(untied, cross, [TOKENS])
+    assert share_transposed_embedding(untied) == EMBEDDING_ELEMENTS * 4
+    assert _embeddings(untied) == [TIED_EMBEDDING]
+    onnx.checker.check_model(untied)
+    np.testing.assert_array_equal(_logits(untied, cross, [TOKENS]), before)
+
+
+def test_a_decoder_without_a_second_copy_is_left_as_it_is(weights: WhisperWeights) -> None:
+    model = decoder_graph(weights)
+    before = model.SerializeToString()
+    assert share_transposed_embedding(model) == 0
+    assert model.SerializeToString() == before
 
 
 def test_decoding_a_token_a_step_with_the_cache_gives_the_logits_of_one_pass(
