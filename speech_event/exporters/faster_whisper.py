@@ -46,7 +46,9 @@ MODEL_FILE = "model.bin"
 CONFIG_FILE = "config.json"
 VOCABULARY_FILES = ("vocabulary.json", "vocabulary.txt", "tokenizer.json")
 WHISPER_SPEC = "WhisperSpec"
-SPEC_REVISIONS = (1, 2, 3)  # each Whisper model.bin CTranslate2 has written; the variables are the same
+# Each WhisperSpec revision CTranslate2 has written: between them its config.json and activation
+# codes changed, not the variables read here
+SPEC_REVISIONS = (1, 2, 3)
 MULTILINGUAL_VOCABULARY = 51865  # whisper's ModelDimensions: is_multilingual = n_vocab >= 51865
 FASTER_WHISPER_DIRECTORY = (
     f"a faster-whisper (CTranslate2) model directory holds {MODEL_FILE}, {CONFIG_FILE} and "
@@ -59,8 +61,8 @@ def is_faster_whisper_directory(path: Path) -> bool:
     return (path / MODEL_FILE).is_file()
 
 
-def _dense(model: ModelBin, scope: str, bias: bool = True) -> Dense:
-    return Dense(model.float32(f"{scope}/weight"), model.float32(f"{scope}/bias") if bias else None)
+def _dense(model: ModelBin, scope: str) -> Dense:
+    return Dense(model.float32(f"{scope}/weight"), model.float32(f"{scope}/bias"))
 
 
 def _norm(model: ModelBin, scope: str) -> Norm:

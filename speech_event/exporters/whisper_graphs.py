@@ -42,7 +42,7 @@ class Dense:
     it, and bias [out]."""
 
     weight: np.ndarray
-    bias: Optional[np.ndarray]
+    bias: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -148,8 +148,6 @@ class _Graph:
         """x @ weight.T + bias; ``scale`` multiplies each output column (folded into the weights)."""
         factor = np.ones(dense.weight.shape[0], np.float32) if scale is None else scale
         y = self.op("MatMul", x, self.weight(f"{name}.weight", dense.weight.T * factor))
-        if dense.bias is None:
-            return y
         return self.op("Add", y, self.weight(f"{name}.bias", dense.bias * factor))
 
     def norm(self, x: str, norm: Norm, name: str) -> str:
@@ -231,12 +229,11 @@ def encoder_graph(weights: WhisperWeights) -> onnx.ModelProto:
     x = "mel"
     for index, (conv, stride) in enumerate([(weights.conv1, 1), (weights.conv2, 2)], start=1):
         name = f"encoder.conv{index}"
-        bias = np.zeros(conv.weight.shape[0], np.float32) if conv.bias is None else conv.bias
         convolved = g.op(
             "Conv",
             x,
             g.weight(f"{name}.weight", conv.weight),
-            g.weight(f"{name}.bias", bias),
+            g.weight(f"{name}.bias", conv.bias),
             pads=[1, 1],
             strides=[stride],
         )

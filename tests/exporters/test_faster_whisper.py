@@ -117,6 +117,13 @@ def test_the_manifest_adds_whispers_special_tokens_to_config_jsons_suppressed_on
     assert read_faster_whisper(directory, {}).manifest == MANIFEST
 
 
+def test_a_layer_norm_epsilon_in_config_json_is_the_models_as_ctranslate2_reads_it(tmp_path: Path) -> None:
+    directory = write_whisper_directory(tmp_path / "faster-whisper")
+    assert read_faster_whisper(directory, {}).weights.layer_norm_epsilon == 1e-5  # whisper's, torch's default
+    _edit_json(directory / "config.json", layer_norm_epsilon=1e-6)
+    assert read_faster_whisper(directory, {}).weights.layer_norm_epsilon == 1e-6
+
+
 def test_tokens_txt_holds_each_tokens_bytes_from_gpt2s_byte_level_characters(tmp_path: Path) -> None:
     pieces = load_tokens(_exported(tmp_path) / "tokens.txt")
     assert pieces[: len(TEXT_TOKENS)] == [b" "] + [
@@ -190,6 +197,15 @@ def _without_variable(name: str) -> Callable[[Path], None]:
     return change
 
 
+def _without_blocks(coder: str) -> Callable[[Path], None]:
+    def change(directory: Path) -> None:
+        variables, aliases = whisper_variables("float32")
+        kept = [variable for variable in variables if not variable[0].startswith(f"{coder}/layer_")]
+        (directory / "model.bin").write_bytes(model_bin_bytes(kept, aliases))
+
+    return change
+
+
 def _with_header(**header: Any) -> Callable[[Path], None]:
     def change(directory: Path) -> None:
         variables, aliases = whisper_variables("float32")
@@ -252,6 +268,10 @@ DIRECTORY = (
             "/model.bin: no variable decoder/num_heads in this WhisperSpec model",
         ),
         (
+            _without_blocks("encoder"),
+            "/model.bin: no encoder/layer_0; a Whisper model of CTranslate2 has its blocks",
+        ),
+        (
             _without_variable("decoder/layer_0/ffn/linear_0/weight"),
             "/model.bin: no variable decoder/layer_0/ffn/linear_0/weight in this WhisperSpec model",
         ),
@@ -268,6 +288,7 @@ DIRECTORY = (
         "other-spec",
         "later-revision",
         "no-heads",
+        "no-blocks",
         "no-weight",
     ],
 )
