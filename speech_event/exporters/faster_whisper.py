@@ -19,20 +19,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
-import onnx
-
 from speech_event.errors import ModelError
 from speech_event.exporters.ctranslate2 import ModelBin, read_model_bin
 from speech_event.exporters.whisper_directory import languages_of, write_text_files
-from speech_event.exporters.whisper_graphs import (
+from speech_event.exporters.whisper_weights import (
     LAYER_NORM_EPSILON,
     DecoderBlock,
     Dense,
     EncoderBlock,
     Norm,
     WhisperWeights,
-    decoder_graph,
-    encoder_graph,
 )
 from speech_event.recognizers.whisper.manifest import WhisperManifest
 from speech_event.recognizers.whisper.model import DECODER_FILE, ENCODER_FILE
@@ -282,6 +278,16 @@ def read_faster_whisper(directory: Path, named: Dict[str, str]) -> FasterWhisper
 def export_faster_whisper(directory: Path, out_dir: Path, named: Dict[str, str]) -> WhisperManifest:
     """Write the engine's directory for the faster-whisper model in ``directory`` to ``out_dir``."""
     model = read_faster_whisper(directory, named)
+    try:
+        import onnx
+
+        from speech_event.exporters.whisper_graphs import decoder_graph, encoder_graph
+    except ImportError:
+        # not a dependency of the node: the robot runs the files, it does not write them
+        raise ModelError(
+            "export-whisper writes the ONNX graphs with the onnx package: pip install onnx (a "
+            "faster-whisper directory needs neither torch nor openai-whisper)"
+        ) from None
     out_dir.mkdir(parents=True, exist_ok=True)
     onnx.save(encoder_graph(model.weights), str(out_dir / ENCODER_FILE))
     onnx.save(decoder_graph(model.weights), str(out_dir / DECODER_FILE))

@@ -17,13 +17,10 @@ import sys
 from pathlib import Path
 from typing import Any, Dict, List, Tuple
 
-import onnx
-
 from speech_event.errors import ModelError
 from speech_event.exporters.faster_whisper import export_faster_whisper, is_faster_whisper_directory
 from speech_event.exporters.quantize import INT8_HELP, quantize_and_say
 from speech_event.exporters.whisper_directory import languages_of, write_text_files
-from speech_event.exporters.whisper_graphs import share_transposed_embedding
 from speech_event.recognizers.whisper.manifest import WhisperManifest
 from speech_event.recognizers.whisper.model import DECODER_FILE, ENCODER_FILE, cross_names
 
@@ -146,6 +143,10 @@ def export_model(model: Any, out_dir: Path) -> None:
             dynamo=False,
         )
     # torch.onnx folds the transposed embedding the logits read into a second copy of it
+    import onnx
+
+    from speech_event.exporters.whisper_graphs import share_transposed_embedding
+
     decoder_path = out_dir / DECODER_FILE
     exported = onnx.load(str(decoder_path))
     if share_transposed_embedding(exported):

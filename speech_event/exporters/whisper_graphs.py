@@ -20,91 +20,19 @@ its columns. ``share_transposed_embedding`` does the same to a decoder that hold
 twice (torch.onnx folds the transpose the logits read into a second copy).
 """
 
-from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import onnx
 from onnx import TensorProto, helper, numpy_helper
 
+from speech_event.exporters.whisper_weights import Dense, Norm, WhisperWeights
 from speech_event.recognizers.whisper.model import cross_names
 
 OPSET = 17
 # Every onnxruntime since 1.13 loads IR version 8 with opset 17; onnx.helper would write its own, newer one.
 IR_VERSION = 8
-LAYER_NORM_EPSILON = 1e-5  # torch.nn.LayerNorm's, whisper's
 TIED_EMBEDDING = "decoder.token_embedding.transposed"
-
-
-@dataclass(frozen=True)
-class Dense:
-    """A linear layer or a convolution: weight [out, in(, kernel)], as torch and CTranslate2 store
-    it, and bias [out]."""
-
-    weight: np.ndarray
-    bias: np.ndarray
-
-
-@dataclass(frozen=True)
-class Norm:
-    """A LayerNorm's scale (gamma) and shift (beta)."""
-
-    gamma: np.ndarray
-    beta: np.ndarray
-
-
-@dataclass(frozen=True)
-class EncoderBlock:
-    """An encoder block: self-attention with query, key and value fused (rows q, k, v), and the MLP."""
-
-    attention_norm: Norm
-    qkv: Dense
-    attention_out: Dense
-    mlp_norm: Norm
-    mlp_in: Dense
-    mlp_out: Dense
-
-
-@dataclass(frozen=True)
-class DecoderBlock:
-    """A decoder block: causal self-attention (q, k, v fused), cross-attention (k, v fused), the MLP."""
-
-    attention_norm: Norm
-    qkv: Dense
-    attention_out: Dense
-    cross_norm: Norm
-    cross_query: Dense
-    cross_kv: Dense
-    cross_out: Dense
-    mlp_norm: Norm
-    mlp_in: Dense
-    mlp_out: Dense
-
-
-@dataclass(frozen=True)
-class WhisperWeights:
-    """A Whisper model's weights, float32, and its heads (the layers are the blocks listed)."""
-
-    conv1: Dense
-    conv2: Dense
-    audio_positions: np.ndarray  # [audio positions, width]
-    encoder_blocks: Sequence[EncoderBlock]
-    encoder_norm: Norm
-    encoder_heads: int
-    embedding: np.ndarray  # [vocabulary, width]
-    text_positions: np.ndarray  # [text context, width]
-    decoder_blocks: Sequence[DecoderBlock]
-    decoder_norm: Norm
-    decoder_heads: int
-    layer_norm_epsilon: float = LAYER_NORM_EPSILON
-
-    @property
-    def width(self) -> int:
-        return int(self.embedding.shape[1])
-
-    @property
-    def mel_bands(self) -> int:
-        return int(self.conv1.weight.shape[1])
 
 
 Shape = Sequence[Union[int, str]]

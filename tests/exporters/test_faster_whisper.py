@@ -322,3 +322,19 @@ def test_the_export_imports_neither_torch_openai_whisper_nor_ctranslate2(
         "encoder.onnx",
         "tokens.txt",
     ]
+
+
+def test_without_onnx_the_export_says_what_to_install(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the robot's install has onnxruntime, not onnx, which only writing the graphs needs
+    monkeypatch.setitem(sys.modules, "onnx", None)
+    monkeypatch.setitem(sys.modules, "speech_event.exporters.whisper_graphs", None)
+    directory = write_whisper_directory(tmp_path / "faster-whisper")
+    with pytest.raises(ModelError) as error:
+        whisper_exporter.export(str(directory), tmp_path / "out", {})
+    assert str(error.value) == (
+        "export-whisper writes the ONNX graphs with the onnx package: pip install onnx (a faster-whisper "
+        "directory needs neither torch nor openai-whisper)"
+    )
+    assert not (tmp_path / "out").exists()

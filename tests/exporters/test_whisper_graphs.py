@@ -16,11 +16,11 @@ from fixtures.ct2_whisper_model import LAYERS, VOCABULARY, WIDTH, write_whisper_
 from speech_event.exporters.faster_whisper import read_faster_whisper
 from speech_event.exporters.whisper_graphs import (
     TIED_EMBEDDING,
-    WhisperWeights,
     decoder_graph,
     encoder_graph,
     share_transposed_embedding,
 )
+from speech_event.exporters.whisper_weights import WhisperWeights
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.model import cross_names
 
