@@ -1,5 +1,7 @@
-"""``speech-event export-whisper CHECKPOINT OUT_DIR``: an openai-whisper checkpoint (a name such as
-``base`` from whisper's cache, or a .pt file) to the directory the Whisper engine loads.
+"""``speech-event export-whisper MODEL OUT_DIR``: a Whisper model to the directory the Whisper engine
+loads. MODEL is a faster-whisper (CTranslate2) directory, converted with numpy and onnx alone
+(faster_whisper.py), or an openai-whisper checkpoint (a name such as ``base`` from whisper's cache,
+or a .pt file), exported with torch.
 
 Writes encoder.onnx (the mel window to each decoder block's cross-attention keys and values),
 decoder.onnx (tokens and the self-attention cache of the tokens before -> logits and the grown
@@ -7,40 +9,22 @@ cache, so decoding costs one position a step), tokens.txt (every token's bytes, 
 tiktoken tokenizer) and config.json (the special tokens, the languages, and the tokens Whisper's
 rules suppress, from whisper's own tokenizer). ``--language kinyarwanda=CODE`` names the language
 token a checkpoint was fine-tuned to use for Kinyarwanda, which Whisper has none for.
-Needs torch and openai-whisper (the ``export`` extra) on a workstation; never on the robot.
+A checkpoint needs torch and openai-whisper (the ``export`` extra) on a workstation; never on the robot.
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Tuple
 
 from speech_event.errors import ModelError
+from speech_event.exporters.faster_whisper import export_faster_whisper, is_faster_whisper_directory
 from speech_event.exporters.quantize import INT8_HELP, quantize_and_say
-from speech_event.recognizers.whisper.manifest import (
-    MANIFEST_FILE,
-    TOKENS_FILE,
-    WhisperManifest,
-    manifest_json,
-    token_lines,
-)
+from speech_event.exporters.whisper_directory import languages_of, write_text_files
+from speech_event.recognizers.whisper.manifest import WhisperManifest
 from speech_event.recognizers.whisper.model import DECODER_FILE, ENCODER_FILE, cross_names
 
 OPSET = 17
-# The node's languages and Whisper's codes for them (Whisper has no Kinyarwanda).
-WHISPER_CODES = {"english": "en"}
-
-
-def languages_of(multilingual: bool, named: Dict[str, str], language_token: Any) -> Dict[str, Optional[int]]:
-    """Our language names -> their tokens: English (no token in an English-only model's prompt),
-    and those named on the command line (``language_token(code)`` raises for an unknown code)."""
-    if not multilingual:
-        if set(named) - {"english"}:
-            raise ModelError("an English-only checkpoint serves english only; --language cannot add another")
-        return {"english": None}
-    codes = {**WHISPER_CODES, **named}
-    return {language: int(language_token(code)) for language, code in codes.items()}
 
 
 def parse_language(setting: str) -> Tuple[str, str]:
@@ -158,6 +142,15 @@ def export_model(model: Any, out_dir: Path) -> None:
             opset_version=OPSET,
             dynamo=False,
         )
+    # torch.onnx folds the transposed embedding the logits read into a second copy of it
+    import onnx
+
+    from speech_event.exporters.whisper_graphs import share_transposed_embedding
+
+    decoder_path = out_dir / DECODER_FILE
+    exported = onnx.load(str(decoder_path))
+    if share_transposed_embedding(exported):
+        onnx.save(exported, str(decoder_path))
 
 
 def manifest_of(model: Any, tokenizer: Any, named: Dict[str, str]) -> WhisperManifest:
@@ -200,15 +193,25 @@ def token_bytes(tokenizer: Any, count: int) -> List[bytes]:
     return pieces
 
 
-def export(checkpoint: str, out_dir: Path, named: Dict[str, str]) -> WhisperManifest:
-    """Export a whisper checkpoint to ``out_dir``: the ONNX files, tokens.txt and config.json."""
+def export(model_path: str, out_dir: Path, named: Dict[str, str]) -> WhisperManifest:
+    """Export a faster-whisper directory or a whisper checkpoint to ``out_dir``: the ONNX files,
+    tokens.txt and config.json."""
+    if is_faster_whisper_directory(Path(model_path)):
+        return export_faster_whisper(Path(model_path), out_dir, named)
+    return export_checkpoint(model_path, out_dir, named)
+
+
+def export_checkpoint(checkpoint: str, out_dir: Path, named: Dict[str, str]) -> WhisperManifest:
+    """Export a whisper checkpoint to ``out_dir`` (torch and openai-whisper)."""
     try:
         import whisper
         from whisper.tokenizer import get_tokenizer
     except ImportError:
         raise ModelError(
-            "export-whisper needs openai-whisper: pip install 'speech-event[export]' (openai-whisper and "
-            "torch); only for exporting, never on the robot"
+            f"{checkpoint} is not a faster-whisper directory (a directory with model.bin), so "
+            "export-whisper reads it as an openai-whisper checkpoint, which needs openai-whisper: "
+            "pip install 'speech-event[export]' (openai-whisper and torch); only for exporting, never on "
+            "the robot"
         ) from None
     model = whisper.load_model(checkpoint, device="cpu")
     model.eval()
@@ -219,17 +222,18 @@ def export(checkpoint: str, out_dir: Path, named: Dict[str, str]) -> WhisperMani
         raise ModelError(f"{checkpoint}: whisper's tokenizer has no language {problem}") from None
     out_dir.mkdir(parents=True, exist_ok=True)
     export_model(model, out_dir)
-    (out_dir / TOKENS_FILE).write_text(
-        token_lines(token_bytes(tokenizer, model.dims.n_vocab)), encoding="ascii"
-    )
-    (out_dir / MANIFEST_FILE).write_text(json.dumps(manifest_json(manifest), indent=2), encoding="utf-8")
+    write_text_files(out_dir, token_bytes(tokenizer, model.dims.n_vocab), manifest)
     return manifest
 
 
 def main(argv: List[str]) -> int:
     """The ``speech-event export-whisper`` command; returns its exit status."""
     parser = argparse.ArgumentParser(prog="speech-event export-whisper", description=__doc__)
-    parser.add_argument("checkpoint", help="a whisper model name (tiny, base, ...) or checkpoint file (.pt)")
+    parser.add_argument(
+        "model",
+        help="a faster-whisper (CTranslate2) model directory, or an openai-whisper model name (tiny, "
+        "base, ...) or checkpoint file (.pt)",
+    )
     parser.add_argument("out_dir", type=Path, help="the model directory to write")
     parser.add_argument(
         "--language",
@@ -242,7 +246,7 @@ def main(argv: List[str]) -> int:
     parser.add_argument("--int8", action="store_true", help=INT8_HELP)
     arguments = parser.parse_args(argv)
     try:
-        manifest = export(arguments.checkpoint, arguments.out_dir, dict(arguments.language))
+        manifest = export(arguments.model, arguments.out_dir, dict(arguments.language))
     except ModelError as problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2

@@ -5,7 +5,7 @@ matrix products int8, and the same texts as fp32 through the node's own engine b
 import logging
 import shutil
 from pathlib import Path
-from typing import Callable, Dict, List, Tuple
+from typing import Callable, Dict, Iterator, List, Tuple
 
 import onnx
 import pytest
@@ -13,6 +13,7 @@ import pytest
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_ctc_model_directory, tones_model_directory, tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
+from fixtures.whisper_tones_optimum import whisper_tones_optimum_directory
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.exporters import nemo as nemo_exporter
@@ -29,6 +30,13 @@ MODELS: Dict[str, Tuple[Callable[[], Path], str, List[str], int]] = {
     "ctc": (tones_ctc_model_directory, "parakeet", ["model.onnx"], 1),
     # its one product by a weight has the weight on the left (templates x spectrum): none to quantize
     "whisper": (whisper_tones_model_directory, "whisper", ["decoder.onnx", "encoder.onnx"], 0),
+    # optimum's layout: the merged decoder's output projection, once in each of its If's branches
+    "whisper-optimum": (
+        whisper_tones_optimum_directory,
+        "whisper",
+        ["decoder_model_merged.onnx", "encoder_model.onnx"],
+        2,
+    ),
 }
 PHRASES = ["go to the kitchen", "yes", "stop", "where is the door", "please open the window"]
 
@@ -45,15 +53,25 @@ def _transcribe(directory: Path, family: str, quantization: str) -> List[str]:
     return [engine.transcribe(speak_tones(phrase, 16000)).text for phrase in PHRASES]
 
 
+def _nodes(graph: onnx.GraphProto) -> Iterator[onnx.NodeProto]:
+    """The graph's nodes and those of the branches and bodies of its control-flow nodes."""
+    for node in graph.node:
+        yield node
+        for attribute in node.attribute:
+            for subgraph in [attribute.g] if attribute.HasField("g") else attribute.graphs:
+                yield from _nodes(subgraph)
+
+
 def _weight_products(path: Path) -> int:
-    """MatMul nodes of the file whose right-hand side is a weight (an initializer)."""
+    """MatMul nodes of the file whose right-hand side is a weight (an initializer: the subgraphs'
+    products read the main graph's)."""
     graph = onnx.load(str(path)).graph
     weights = {initializer.name for initializer in graph.initializer}
-    return sum(1 for node in graph.node if node.op_type == "MatMul" and node.input[1] in weights)
+    return sum(1 for node in _nodes(graph) if node.op_type == "MatMul" and node.input[1] in weights)
 
 
 def _int8_products(path: Path) -> int:
-    return sum(1 for node in onnx.load(str(path)).graph.node if node.op_type == "MatMulInteger")
+    return sum(1 for node in _nodes(onnx.load(str(path)).graph) if node.op_type == "MatMulInteger")
 
 
 @pytest.mark.parametrize("name", list(MODELS))

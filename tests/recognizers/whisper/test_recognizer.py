@@ -14,7 +14,8 @@ from fixtures.audio import noise, speak_tones
 from fixtures.whisper_tones_model import MANIFEST as TONES_MANIFEST
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
-from speech_event.exporters.whisper import languages_of, parse_language
+from speech_event.exporters.whisper import parse_language
+from speech_event.exporters.whisper_directory import languages_of
 from speech_event.grammar import requested_grammar
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.onnx.mel import mel_filterbank
@@ -256,10 +257,11 @@ def test_the_exporter_maps_languages_to_whisper_tokens() -> None:
     assert parse_language("kinyarwanda=sw") == ("kinyarwanda", "sw")
 
 
-def test_without_openai_whisper_the_export_says_how_to_get_it(tmp_path: Path) -> None:
+def test_without_openai_whisper_the_export_of_a_checkpoint_says_how_to_get_it(tmp_path: Path) -> None:
     result = run_application("export-whisper", "base", str(tmp_path))
     assert result.returncode == 2
     assert result.stderr == (
-        "error: export-whisper needs openai-whisper: pip install 'speech-event[export]' (openai-whisper and "
-        "torch); only for exporting, never on the robot\n"
+        "error: base is not a faster-whisper directory (a directory with model.bin), so export-whisper reads it "
+        "as an openai-whisper checkpoint, which needs openai-whisper: pip install 'speech-event[export]' "
+        "(openai-whisper and torch); only for exporting, never on the robot\n"
     )

@@ -1,0 +1,142 @@
+"""The Whisper graphs built from numpy weights (speech_event/exporters/whisper_graphs.py), on the
+small random Whisper of fixtures/ct2_whisper_model.py: the token embedding stored once, a decoder
+holding it twice (as torch.onnx writes it) brought to once with the same logits, and the
+decoder's cache giving what one pass over all the tokens gives."""
+
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+import onnx
+import onnxruntime
+import pytest
+from onnx import helper, numpy_helper
+
+from fixtures.ct2_whisper_model import LAYERS, VOCABULARY, WIDTH, write_whisper_directory
+from speech_event.exporters.faster_whisper import read_faster_whisper
+from speech_event.exporters.whisper_graphs import (
+    TIED_EMBEDDING,
+    decoder_graph,
+    encoder_graph,
+    share_transposed_embedding,
+)
+from speech_event.exporters.whisper_weights import WhisperWeights
+from speech_event.recognizers.whisper.features import whisper_log_mel
+from speech_event.recognizers.whisper.model import cross_names
+
+EMBEDDING_ELEMENTS = len(VOCABULARY) * WIDTH
+TOKENS = [54, 61, 3, 30, 44, 7]  # sot, no timestamps, then text tokens
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory: pytest.TempPathFactory) -> WhisperWeights:
+    directory = write_whisper_directory(tmp_path_factory.mktemp("faster-whisper"))
+    return read_faster_whisper(directory, {}).weights
+
+
+@pytest.fixture(scope="module")
+def cross(weights: WhisperWeights) -> Dict[str, np.ndarray]:
+    """The encoder's outputs for a second of a chirp."""
+    time = np.arange(16000) / 16000
+    mel = whisper_log_mel(np.sin(2 * np.pi * (200 + 600 * time) * time).astype(np.float32), 80)
+    session = onnxruntime.InferenceSession(encoder_graph(weights).SerializeToString())
+    outputs = session.run(None, {"mel": mel[None]})
+    return dict(zip(cross_names(LAYERS), outputs))
+
+
+def _embeddings(model: onnx.ModelProto) -> List[str]:
+    """The initializers as large as the token embedding."""
+    return [
+        tensor.name for tensor in model.graph.initializer if int(np.prod(tensor.dims)) == EMBEDDING_ELEMENTS
+    ]
+
+
+def _logits(model: onnx.ModelProto, cross: Dict[str, np.ndarray], steps: List[List[int]]) -> np.ndarray:
+    """The logits of each step's tokens, the cache carried from step to step, all steps' rows."""
+    session = onnxruntime.InferenceSession(model.SerializeToString())
+    cache = np.zeros((LAYERS, 1, 2, 0, WIDTH // 2), np.float32)
+    self_k = self_v = cache
+    rows = []
+    for tokens in steps:
+        logits, self_k, self_v = session.run(
+            None, {"tokens": np.array([tokens], np.int64), "self_k": self_k, "self_v": self_v, **cross}
+        )
+        rows.append(logits[0])
+    return np.concatenate(rows)
+
+
+def _untied(model: onnx.ModelProto) -> onnx.ModelProto:
+    """The decoder as torch.onnx writes it: the embedding gathered by rows from a copy of its own."""
+    untied = onnx.ModelProto()
+    untied.CopyFrom(model)
+    graph = untied.graph
+    table = next(tensor for tensor in graph.initializer if tensor.name == TIED_EMBEDDING)
+    graph.initializer.append(
+        numpy_helper.from_array(numpy_helper.to_array(table).T.copy(), "embedding.weight")
+    )
+    lookup = [
+        index
+        for index, node in enumerate(graph.node)
+        if node.input[:1] == [TIED_EMBEDDING] and node.op_type == "Gather"
+    ]
+    assert len(lookup) == 1
+    output = graph.node[lookup[0] + 1].output[0]  # the lookup's Transpose
+    del graph.node[lookup[0] : lookup[0] + 2]
+    graph.node.insert(lookup[0], helper.make_node("Gather", ["embedding.weight", "tokens"], [output]))
+    return untied
+
+
+def test_the_decoder_stores_the_token_embedding_once_and_the_logits_read_it(weights: WhisperWeights) -> None:
+    model = decoder_graph(weights)
+    assert _embeddings(model) == [TIED_EMBEDDING]
+    readers = sorted(node.op_type for node in model.graph.node if TIED_EMBEDDING in node.input)
+    assert readers == ["Gather", "MatMul"]
+    logits = next(node for node in model.graph.node if node.output[0] == "logits")
+    assert (logits.op_type, logits.input[1]) == ("MatMul", TIED_EMBEDDING)
+
+
+def test_a_decoder_holding_the_embedding_twice_gets_it_once_with_the_same_logits(
+    weights: WhisperWeights, cross: Dict[str, np.ndarray]
+) -> None:
+    untied = _untied(decoder_graph(weights))
+    assert _embeddings(untied) == [TIED_EMBEDDING, "embedding.weight"]
+    before = _logits(untied, cross, [TOKENS])
+    assert share_transposed_embedding(untied) == EMBEDDING_ELEMENTS * 4
+    assert _embeddings(untied) == [TIED_EMBEDDING]
+    onnx.checker.check_model(untied)
+    np.testing.assert_array_equal(_logits(untied, cross, [TOKENS]), before)
+
+
+def test_a_decoder_without_a_second_copy_is_left_as_it_is(weights: WhisperWeights) -> None:
+    model = decoder_graph(weights)
+    before = model.SerializeToString()
+    assert share_transposed_embedding(model) == 0
+    assert model.SerializeToString() == before
+
+
+def test_decoding_a_token_a_step_with_the_cache_gives_the_logits_of_one_pass(
+    weights: WhisperWeights, cross: Dict[str, np.ndarray]
+) -> None:
+    model = decoder_graph(weights)
+    whole = _logits(model, cross, [TOKENS])
+    np.testing.assert_allclose(
+        _logits(model, cross, [TOKENS[:2], *([token] for token in TOKENS[2:])]), whole, atol=1e-5
+    )
+    np.testing.assert_allclose(_logits(model, cross, [TOKENS[:3], TOKENS[3:]]), whole, atol=1e-5)
+    # and the later tokens change no earlier position's logits (the mask is causal)
+    np.testing.assert_allclose(_logits(model, cross, [TOKENS[:3]]), whole[:3], atol=1e-5)
+
+
+def test_the_encoder_gives_each_decoder_block_its_cross_keys_and_values(cross: Dict[str, np.ndarray]) -> None:
+    assert {name: array.shape for name, array in cross.items()} == {
+        "cross_k_0": (1, 2, 8, 1500),
+        "cross_v_0": (1, 2, 1500, 8),
+        "cross_k_1": (1, 2, 8, 1500),
+        "cross_v_1": (1, 2, 1500, 8),
+    }
+
+
+def test_the_written_files_pass_onnxs_checker(weights: WhisperWeights, tmp_path: Path) -> None:
+    for name, model in (("encoder.onnx", encoder_graph(weights)), ("decoder.onnx", decoder_graph(weights))):
+        onnx.save(model, str(tmp_path / name))
+        onnx.checker.check_model(str(tmp_path / name), full_check=True)
