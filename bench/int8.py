@@ -27,7 +27,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from bench.asr import COMMANDS, peak_mib, resident_mib, word_errors
+from bench.measures import COMMANDS, peak_mib, resident_mib, word_errors
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.exporters.quantize import quantize_directory
