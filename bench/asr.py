@@ -39,7 +39,7 @@ from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.features import FeatureSettings, features
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.onnx.directory import family_of
+from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
