@@ -24,7 +24,7 @@ node's lock; the jobs run on the worker and take it.
 import functools
 import logging
 import threading
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass, field
 from typing import Callable, Optional, Protocol
 
 from speech_event.config import SpeechEventConfig
@@ -63,33 +63,28 @@ class Turn(Protocol):
         ...
 
 
+@dataclass(eq=False)
 class BackgroundRuns:
     """Speculations and partial results on the worker: when each starts, is cancelled, adopted or
     dropped (the rules above), each run's job, and what its outcome becomes."""
 
-    def __init__(
-        self,
-        config: SpeechEventConfig,
-        clock: Clock,
-        lock: threading.Lock,
-        worker: Worker,
-        turn: Turn,
-        so_far: Callable[[], Optional[UtteranceSoFar]],
-        worker_idle: Callable[[], bool],
-    ) -> None:
-        """``so_far``: the utterance being collected, None when there is none (or the node is
-        disabled); ``worker_idle``: no closed utterance is being recognized or waits for it."""
-        self._clock = clock
-        self._lock = lock
-        self._worker = worker
-        self._turn = turn
-        self._so_far = so_far
-        self._worker_idle = worker_idle
+    config: InitVar[SpeechEventConfig]
+    clock: Clock
+    lock: threading.Lock
+    worker: Worker
+    turn: Turn
+    # The utterance being collected; None when there is none (or the node is disabled).
+    so_far: Callable[[], Optional[UtteranceSoFar]]
+    worker_idle: Callable[[], bool]  # no closed utterance is being recognized or waits for it
+    speculations: SpeculationCounts = field(init=False)  # how speculation fared
+    partials: PartialCounts = field(init=False)  # how partial results fared
+
+    def __post_init__(self, config: SpeechEventConfig) -> None:
         self._speculation = SpeculationRules(config)
         self._partials = PartialRules(config)
-        self._partial_timer = RearmingTimer(clock, lock, self._partials.due, self.partial)
-        self.speculations: SpeculationCounts = self._speculation.counts
-        self.partials: PartialCounts = self._partials.counts
+        self._partial_timer = RearmingTimer(self.clock, self.lock, self._partials.due, self.partial)
+        self.speculations = self._speculation.counts
+        self.partials = self._partials.counts
 
     # -- what the node tells them -------------------------------------------------------------------
 
@@ -126,10 +121,10 @@ class BackgroundRuns:
         if speculation is None:
             return False
         if speculation.outcome is None:  # still running: its recognition starts now, as it were
-            speculation.watchdog = self._worker.watchdog.watch(job)
+            speculation.watchdog = self.worker.watchdog.watch(job)
         else:  # on the clock's next turn: the worker is idle (see SpeculationRules.adopt)
-            self._clock.call_at(
-                job.closed_at, functools.partial(self._worker.publication.conclude, job, speculation.outcome)
+            self.clock.call_at(
+                job.closed_at, functools.partial(self.worker.publication.conclude, job, speculation.outcome)
             )
         return True
 
@@ -162,27 +157,27 @@ class BackgroundRuns:
 
     def speculate(self) -> None:
         """Speculate on the utterance being collected if its gap has passed and the rules allow it."""
-        so_far = self._so_far()
-        if so_far is None or not self._turn.gap_passed():
+        so_far = self.so_far()
+        if so_far is None or not self.turn.gap_passed():
             return
-        if not self._speculation.may_start(so_far.recognizer, self._worker_idle()):
+        if not self._speculation.may_start(so_far.recognizer, self.worker_idle()):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = so_far.audio()
         speculation = self._speculation.start(audio.size, so_far.recognizer, so_far.grammar)
         job = functools.partial(self._speculated, speculation, audio, so_far.origin)
-        speculation.handle = self._worker.executor.submit(job)
+        speculation.handle = self.worker.executor.submit(job)
 
     def partial(self) -> None:
         """Ask for the text of the utterance so far if a partial is due and the worker is idle (no
         closed utterance, no speculation)."""
-        so_far, now = self._so_far(), self._clock.now()
+        so_far, now = self.so_far(), self.clock.now()
         if so_far is None:
             return
-        idle = self._worker_idle() and self._speculation.current is None
+        idle = self.worker_idle() and self._speculation.current is None
         if not self._partials.may_start(so_far.recognizer, idle, so_far.samples, now):
             return
-        audio, recognizer, submit = so_far.audio(), so_far.recognizer, self._worker.executor.submit
+        audio, recognizer, submit = so_far.audio(), so_far.recognizer, self.worker.executor.submit
         if isinstance(recognizer, Stoppable):
             run = self._partials.start_run(audio.size, recognizer, so_far.grammar, now)
             run.handle = submit(functools.partial(self._partial_run, run, audio, so_far.origin))
@@ -195,11 +190,11 @@ class BackgroundRuns:
 
     def _recognize_unless_cancelled(self, run: Speculation, audio: Audio) -> Optional[RecognitionOutcome]:
         """``run``'s recognition of ``audio``; None when it was cancelled before."""
-        with self._lock:
+        with self.lock:
             if run.cancelled:
                 return None
             run.running = True
-        return self._worker.recognize(audio, run.recognizer, run.grammar)
+        return self.worker.recognize(audio, run.recognizer, run.grammar)
 
     def _speculated(self, speculation: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """Transcribe the utterance so far; publish it only if it closed as it is."""
@@ -207,39 +202,39 @@ class BackgroundRuns:
         if outcome is None:
             return
         partial: Optional[Transcript] = None
-        with self._lock:
+        with self.lock:
             job = self._speculation.finished(speculation, outcome)
             if job is None:
                 if self._speculation.ends_turn(speculation):
-                    self._turn.end_early()
+                    self.turn.end_early()
                 if not speculation.cancelled:  # the utterance so far: its text is a partial too
                     partial = self._partials.spoken(speculation.samples, outcome.answer)
         if job is not None:
-            self._worker.publication.conclude(job, outcome)
+            self.worker.publication.conclude(job, outcome)
         elif partial is not None:
-            self._worker.publication.partial(partial, origin)
+            self.worker.publication.partial(partial, origin)
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """A Stoppable engine's text of the utterance so far."""
         outcome = self._recognize_unless_cancelled(run, audio)
         if outcome is None:
             return
-        with self._lock:
+        with self.lock:
             partial = self._partials.finished(run, outcome)
             self.partial()  # more audio came meanwhile
         if partial is not None:
-            self._worker.publication.partial(partial, origin)
+            self.worker.publication.partial(partial, origin)
 
     def _partial_feed(self, feed: PartialFeed, audio: Audio, origin: TextOrigin) -> None:
         """An Incremental engine fed the new audio of the utterance so far."""
-        began = self._worker.stopwatch()
+        began = self.worker.stopwatch()
         try:
             answer = feed.feed(audio)
         except (Exception, SystemExit):  # no partial; the final recognition says what failed
             _LOG.debug("a partial result failed", exc_info=True)
             answer = None
-        with self._lock:
-            partial = self._partials.fed(feed, answer, self._worker.stopwatch() - began)
+        with self.lock:
+            partial = self._partials.fed(feed, answer, self.worker.stopwatch() - began)
             self.partial()  # more audio came meanwhile
         if partial is not None:
-            self._worker.publication.partial(partial, origin)
+            self.worker.publication.partial(partial, origin)

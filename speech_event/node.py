@@ -39,7 +39,7 @@ from speech_event.pipeline.assembly import UtteranceAssembler
 from speech_event.pipeline.closed_utterances import ClosedUtterances
 from speech_event.pipeline.publication import Publication, TextOrigin
 from speech_event.pipeline.recognition import Recognition
-from speech_event.pipeline.recognition_queue import RecognitionJob
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
@@ -106,8 +106,9 @@ class SpeechEventNode:
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         recognition = Recognition(config.sample_rate, screen, stopwatch)
         worker = Worker(executor, recognition, stopwatch, self._publication, self._watchdog)
+        self._queue = RecognitionQueue(config.max_backlog)
         self._closed = ClosedUtterances(
-            config.max_backlog, self._lock, worker, lambda: self._background.worker_free()
+            self._queue, self._lock, worker, lambda: self._background.worker_free()
         )
         self._background = BackgroundRuns(
             config, clock, self._lock, worker, self._turn, self._so_far, self._closed.idle
@@ -135,12 +136,12 @@ class SpeechEventNode:
     @property
     def queued_speech_seconds(self) -> float:
         """Seconds of speech waiting for recognition (bounded by max_backlog)."""
-        return self._closed.seconds
+        return self._queue.seconds
 
     @property
     def dropped_utterances(self) -> int:
         """Utterances dropped unrecognized to keep within max_backlog."""
-        return self._closed.dropped
+        return self._queue.dropped
 
     @property
     def started_at(self) -> float:
@@ -237,12 +238,11 @@ class SpeechEventNode:
 
     def _so_far(self) -> Optional[UtteranceSoFar]:
         """Under the lock: the utterance being collected, None when there is none (or disabled)."""
-        if not self._enabled or self._assembler.pending_samples == 0:
+        pending, last = self._assembler.pending_samples, self._turn.last_arrival
+        if not self._enabled or pending == 0:
             return None
-        last = self._turn.last_arrival
         first = self._collecting_since if self._collecting_since is not None else last
         origin = TextOrigin(self._language, type(self._recognizer).__name__, first, last)
-        pending = self._assembler.pending_samples
         return UtteranceSoFar(pending, self._assembler.peek, self._recognizer, self._grammar, origin)
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:
@@ -341,8 +341,8 @@ class SpeechEventNode:
                 clipped=self._rejections.clipped,
                 timed_out=self._watchdog.timed_out,
                 utterances=self._utterances,
-                queued_seconds=self._closed.seconds,
-                dropped=self._closed.dropped,
+                queued_seconds=self._queue.seconds,
+                dropped=self._queue.dropped,
                 partials_published=self.partials.published,
                 partial_seconds=self.partials.worker_seconds,
             )

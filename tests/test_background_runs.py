@@ -12,7 +12,7 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import pytest
 
-from speech_event.adapters.fake_clock import FakeClock
+from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
@@ -78,23 +78,15 @@ class Fed:
         return Transcript(f"fed {self._fed}")
 
 
-class Handle:
-    def __init__(self, job: Callable[[], None]) -> None:
-        self.job = job
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
-
-
 class Jobs:
-    """The worker: jobs wait until ``run_all``; a cancelled one never runs."""
+    """The worker: jobs wait until ``run_all``; a cancelled one never runs. A job's handle is a
+    FakeTimer: its callback is the job."""
 
     def __init__(self) -> None:
-        self.handles: List[Handle] = []
+        self.handles: List[FakeTimer] = []
 
-    def submit(self, job: Callable[[], None]) -> Handle:
-        self.handles.append(Handle(job))
+    def submit(self, job: Callable[[], None]) -> FakeTimer:
+        self.handles.append(FakeTimer(job))
         return self.handles[-1]
 
     @property
@@ -105,7 +97,7 @@ class Jobs:
         while self.handles:
             handle = self.handles.pop(0)
             if not handle.cancelled:
-                handle.job()
+                handle.callback()
 
 
 class Recorder:
@@ -189,13 +181,25 @@ def _rig(engine: Optional[Recognizer] = None, config: SpeechEventConfig = CONFIG
     return Rig(runs, clock, jobs, published, turn, node, watchdog)
 
 
-def _speaking(engine: Optional[Recognizer] = None, config: SpeechEventConfig = CONFIG) -> Rig:
+def _speaking(
+    engine: Optional[Recognizer] = None, config: SpeechEventConfig = CONFIG, paused: bool = True
+) -> Rig:
     """A rig whose utterance started at 0 s with one block of 4096 samples (the Sizes engine
-    unless ``engine`` is given); its first partial is due at 0.5 s."""
+    unless ``engine`` is given); its first partial is due at 0.5 s. ``paused``: the speaker has
+    paused for speculation_gap."""
     rig = _rig(engine, config)
+    rig.turn.paused = paused
     rig.node.add(4096)
     rig.runs.utterance_started(0.0)
     rig.runs.heard()
+    return rig
+
+
+def _partial_started(engine: Optional[Recognizer] = None) -> Rig:
+    """A rig whose first partial started at 0.5 s, the speaker talking on (no speculation)."""
+    rig = _speaking(engine, paused=False)
+    rig.clock.advance(0.5)
+    assert rig.runs.partials.started == 1
     return rig
 
 
@@ -234,10 +238,7 @@ def test_no_second_speculation_starts_while_one_is_there() -> None:
 
 
 def test_a_speculation_cancels_the_partial_in_progress() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
-    rig.clock.advance(0.5)  # the partial is due
-    assert rig.runs.partials.started == 1
+    rig = _partial_started()
     partial_run = rig.jobs.handles[0]
     rig.turn.paused = True
     rig.runs.speculate()
@@ -325,8 +326,7 @@ def test_an_adopted_speculation_running_past_recognition_timeout_is_stopped() ->
 
 
 def test_the_first_partial_is_due_a_period_after_the_first_block_and_publishes_its_text() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
+    rig = _speaking(paused=False)
     rig.clock.advance(0.49)
     assert rig.jobs.waiting == 0
     rig.clock.advance(0.01)
@@ -336,8 +336,7 @@ def test_the_first_partial_is_due_a_period_after_the_first_block_and_publishes_i
 
 
 def test_a_partial_waits_for_the_worker_and_starts_when_it_is_free() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
+    rig = _speaking(paused=False)
     rig.node.idle = False
     rig.clock.advance(1.0)
     assert rig.jobs.waiting == 0
@@ -354,9 +353,7 @@ def test_a_partial_waits_while_a_speculation_is_there() -> None:
 
 
 def test_a_partial_starts_again_only_when_due_and_on_more_audio() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
-    rig.clock.advance(0.5)
+    rig = _partial_started()
     rig.jobs.run_all()  # ends at 0.5 s: the next is due at 1.0 s
     rig.runs.partial()
     assert rig.runs.partials.started == 1  # not due
@@ -372,18 +369,14 @@ def test_a_partial_starts_again_only_when_due_and_on_more_audio() -> None:
 
 
 def test_more_audio_does_not_cancel_a_partial_run() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
-    rig.clock.advance(0.5)
+    rig = _partial_started()
     rig.runs.more_audio()
     assert not rig.jobs.handles[0].cancelled
 
 
 def test_an_incremental_engine_is_fed_only_the_audio_new_since_its_last_partial() -> None:
     engine = Fed()
-    rig = _speaking(engine)
-    rig.turn.paused = False
-    rig.clock.advance(0.5)
+    rig = _partial_started(engine)
     rig.jobs.run_all()
     rig.node.add(1000)
     rig.runs.heard()
@@ -397,27 +390,35 @@ def test_an_incremental_engine_is_fed_only_the_audio_new_since_its_last_partial(
 # -- what cancels a partial ---------------------------------------------------------------------------
 
 
-def test_a_closed_utterance_cancels_the_partial_run_and_stops_its_engine_once_running() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
-    rig.clock.advance(0.5)
-    handle = rig.jobs.handles[0]
+def test_a_closed_utterance_cancels_the_partial_run_before_it_runs() -> None:
+    rig = _partial_started()
     assert not rig.runs.adopt(rig.node.job(7))
-    assert handle.cancelled
-    assert _sizes(rig).stops == 0  # it had not started
+    assert rig.jobs.handles[0].cancelled
+    assert _sizes(rig).stops == 0
+
+
+def test_a_closed_utterance_stops_the_partial_run_running_and_its_text_is_not_published() -> None:
+    rig = _partial_started()
+
+    def closes() -> None:
+        assert not rig.runs.adopt(rig.node.job(7))
+
+    _sizes(rig).during = closes
+    rig.jobs.run_all()
+    assert _sizes(rig).stops == 1
+    assert rig.published.said == []
+    assert rig.runs.partials == PartialCounts(started=1, published=0, worker_seconds=TOOK)
 
 
 def test_a_closing_utterance_unsets_the_partial_timer() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
+    rig = _speaking(paused=False)
     rig.runs.utterance_closed()
     rig.clock.advance(1.0)
     assert rig.runs.partials.started == 0
 
 
 def test_a_cut_at_the_length_limit_starts_the_partials_of_a_new_utterance() -> None:
-    rig = _speaking()
-    rig.turn.paused = False
+    rig = _speaking(paused=False)
     rig.clock.advance(0.4)
     rig.runs.utterance_cut(0.4)
     rig.clock.advance(0.49)
@@ -438,9 +439,7 @@ def test_an_engine_change_disabling_or_stop_cancels_the_speculation(how: str) ->
 def test_an_engine_change_disabling_or_stop_cancels_the_partial_and_only_the_change_leaves_its_timer(
     how: str, timer_left: bool
 ) -> None:
-    rig = _speaking()
-    rig.turn.paused = False
-    rig.clock.advance(0.5)  # the first partial starts
+    rig = _partial_started()
     rig.node.add(4096)
     rig.runs.heard()  # a block: the next partial is due at 1.0 s
     getattr(rig.runs, how)()

@@ -15,24 +15,15 @@ class ClosedUtterances:
     """The closed utterances handed to the worker, and the one it recognizes now."""
 
     def __init__(
-        self, max_backlog: float, lock: threading.Lock, worker: Worker, after_each: Callable[[], None]
+        self, queue: RecognitionQueue, lock: threading.Lock, worker: Worker, after_each: Callable[[], None]
     ) -> None:
-        """``after_each``: called under ``lock`` when the worker has finished one."""
-        self._queue = RecognitionQueue(max_backlog)
+        """``queue``: where they wait; ``after_each``: called under ``lock`` when the worker has
+        finished one."""
+        self._queue = queue
         self._lock = lock
         self._worker = worker
         self._after_each = after_each
         self.running: Optional[RecognitionJob] = None  # the utterance being recognized
-
-    @property
-    def seconds(self) -> float:
-        """Seconds of speech waiting (bounded by max_backlog)."""
-        return self._queue.seconds
-
-    @property
-    def dropped(self) -> int:
-        """Utterances dropped unrecognized to keep within max_backlog."""
-        return self._queue.dropped
 
     def idle(self) -> bool:
         """Under the lock: none is being recognized or waits for it."""
