@@ -1,6 +1,6 @@
 """The background runs: what the recognition worker does for the utterance still being collected.
 
-Three kinds, at most one of each at a time: a speculation (speculation.py: its text may become the
+Two kinds, at most one of each at a time: a speculation (speculation.py: its text may become the
 closed utterance's), and a partial result (partials.py): a Stoppable engine's partial run, or an
 Incremental engine's partial feed. Closed utterances always come first. The rules:
 
@@ -12,13 +12,14 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 - a block cancels the speculation (what it transcribes is no longer the utterance), not the
   partial (its text is still the text so far);
 - a closing utterance adopts the speculation on exactly its audio, engine and grammar (its outcome
-  is the utterance's, published at once or when it ends) and cancels any other, and the partial;
+  is the utterance's, published at once or when it ends), cancels one on other audio, and cancels
+  the partial;
 - set_language, set_grammar, disabling and stop cancel both;
 - when a run ends, or the worker finishes a closed utterance, the next run may start.
 
 A speculation that ends with the utterance still being collected may end the turn early
 (``early_pause``), and its text is a partial too when it is new. Every method is called under the
-node's lock; the jobs run on the worker and take it.
+node's lock; the jobs run on the worker and take the lock.
 """
 
 import functools
