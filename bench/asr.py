@@ -25,6 +25,8 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
+from bench import int8
+from bench.measures import COMMANDS, peak_mib, word_errors
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
 from fixtures.transducer_model import build_random_transducer
@@ -37,76 +39,12 @@ from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.features import FeatureSettings, features
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.onnx.directory import family_of
+from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
-COMMANDS = [
-    "hello pepper",
-    "goodbye",
-    "thank you",
-    "yes",
-    "no",
-    "stop",
-    "follow me",
-    "come here",
-    "turn left",
-    "turn right",
-    "go forward",
-    "go back",
-    "go to the kitchen",
-    "go to the living room",
-    "go to the door",
-    "open the door",
-    "close the door",
-    "bring me the red cup",
-    "bring me the blue cup",
-    "put it on the table",
-    "pick up the ball",
-    "what time is it",
-    "what is your name",
-    "how are you",
-    "tell me a story",
-    "play some music",
-    "turn on the light",
-    "turn off the light",
-    "sit down",
-    "stand up",
-    "look at me",
-    "wave your hand",
-]
 LIBRIVOX = Path("/usr/share/pocketsphinx/test/data/librivox")
-
-
-def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
-    """(word edits, reference words): Levenshtein distance over words."""
-    ref, hyp = reference.split(), hypothesis.split()
-    previous = list(range(len(hyp) + 1))
-    for i, word in enumerate(ref, start=1):
-        current = [i]
-        for j, other in enumerate(hyp, start=1):
-            current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != other)))
-        previous = current
-    return previous[-1], len(ref)
-
-
-def peak_mib() -> float:
-    """This process's peak resident memory: VmHWM, which starts afresh at exec (ru_maxrss does not:
-    it would carry the parent's peak, the quantizer's among it)."""
-    return _status_mib("VmHWM")
-
-
-def resident_mib() -> float:
-    """This process's resident memory now (VmRSS)."""
-    return _status_mib("VmRSS")
-
-
-def _status_mib(field: str) -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(f"{field}:"):
-            return int(line.split()[1]) / 1024
-    raise RuntimeError(f"no {field} in /proc/self/status")
 
 
 def score(recognizer: Recognizer, samples: Sequence[Tuple[str, np.ndarray]]) -> Tuple[float, float]:
@@ -255,6 +193,4 @@ if __name__ == "__main__":
     recorded_speech()
     nemo_engine()
     family_models()
-    from bench.int8 import figures  # here: bench/int8.py imports this module
-
-    figures([])
+    int8.figures([])

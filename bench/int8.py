@@ -27,14 +27,16 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from bench.asr import COMMANDS, peak_mib, resident_mib, word_errors
+from bench.measures import COMMANDS, peak_mib, resident_mib, word_errors
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.exporters.quantize import quantize_directory
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER
-from speech_event.recognizers.onnx.directory import MANIFEST_FILE, WHISPER_FAMILY, family_of, int8_file
+from speech_event.recognizers.onnx.directory import MANIFEST_FILE, int8_file
+from speech_event.recognizers.onnx.families import family_of
+from speech_event.recognizers.whisper.manifest import WHISPER
 from speech_event.recognizers.whisper.optimum_layout import is_optimum_directory
 
 SECONDS = 10
@@ -58,7 +60,7 @@ def _onnx_asr(directory: Path, quantization: str) -> Optional[Callable[[np.ndarr
     """onnx-asr's model on ``directory``; None for a directory it has no reader for."""
     import onnx_asr
 
-    if family_of(directory, unrecorded=CONFORMER_TRANSDUCER) == WHISPER_FAMILY:
+    if family_of(directory, unrecorded=CONFORMER_TRANSDUCER) == WHISPER:
         if not is_optimum_directory(directory):
             return None
         model_type, language = "whisper", {"language": "en"}

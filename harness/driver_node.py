@@ -16,10 +16,11 @@ import sys
 import threading
 import time
 from contextlib import ExitStack
-from typing import Any, Callable, List, Optional, Tuple
+from typing import Callable, List, Optional, Tuple
 
 from harness.driver import DRIVER_FORMAT, AudioFileError, DriverConfig, gate_settings, play, read_audio
 from harness.gate import Piece, SpeechGate
+from harness.link import Link
 from harness.microphone import Microphone, MicrophoneError, describe_devices, input_devices, load_sounddevice
 from harness.scenario import ScenarioError, load_scenario
 from harness.timeline import ComeUp, GoDown, Publish, build_timeline
@@ -31,7 +32,6 @@ from speech_event.errors import ConfigError, ModelError
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Clock, Publisher
 
-SUBSCRIBER_TIMEOUT = 30.0
 # --transport memory: the most seconds the node may take, after the source ends, to close the last
 # utterance and to transcribe what is queued.
 SETTLE_TIMEOUT = 60.0
@@ -40,50 +40,6 @@ USAGE_ERROR = 2
 
 def _say(line: str) -> None:
     print(f"speech_event_driver: {line}", file=sys.stderr, flush=True)
-
-
-class Link:
-    """soundDetection's presence on the topic: up (a publisher), or down (none)."""
-
-    def __init__(self, advertise: Callable[[], Any], wait_for_subscriber: Callable[[Any], None]) -> None:
-        self._advertise = advertise
-        self._wait = wait_for_subscriber
-        self.publisher: Optional[Any] = None
-
-    def up(self) -> Publisher:
-        publisher: Publisher = self._advertise()
-        self._wait(publisher)  # messages sent before a subscriber connects are lost
-        self.publisher = publisher
-        return publisher
-
-    def down(self, crash: bool) -> None:
-        if self.publisher is not None:
-            # The in-memory bus can crash a publisher (a stale registration); rospy only unregisters.
-            stop = (
-                getattr(self.publisher, "crash" if crash else "shutdown", None) or self.publisher.unregister
-            )
-            stop()
-            self.publisher = None
-
-
-def _ros() -> Tuple[Link, Clock, Callable[[], bool]]:
-    import rospy
-
-    from speech_event.adapters.ros import RosClock, RosTransport
-
-    rospy.init_node("soundDetection")
-    transport = RosTransport()
-
-    def wait(publisher: Any) -> None:
-        deadline = time.monotonic() + SUBSCRIBER_TIMEOUT
-        while publisher.connections() == 0 and time.monotonic() < deadline and not rospy.is_shutdown():
-            time.sleep(0.01)
-
-    return (
-        Link(lambda: transport.advertise(SIGNAL_TOPIC, Float32MultiArray), wait),
-        RosClock(),
-        rospy.is_shutdown,
-    )
 
 
 def _memory(
@@ -209,7 +165,9 @@ def main(argv: Optional[List[str]] = None) -> int:
             if arguments.transport == "memory":
                 link, clock, stopped = _memory(stack, node_config, arguments.recognizer)
             else:
-                link, clock, stopped = _ros()
+                from harness.ros.driver_side import ros_side  # rospy: only on ROS
+
+                link, clock, stopped = ros_side()
             if arguments.source is None:
                 _listen(config, link, stopped)
             elif arguments.source.endswith(".toml"):

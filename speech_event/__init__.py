@@ -18,195 +18,135 @@ paths may move::
 """
 
 import importlib
-from typing import TYPE_CHECKING, Any, Dict, List
+from typing import TYPE_CHECKING, Any, Dict, List, Tuple
 
-if TYPE_CHECKING:  # for type checkers; at run time each name is imported when first used
-    from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
-    from speech_event.adapters.fake_clock import FakeClock
-    from speech_event.adapters.memory_bus import InMemoryBus
-    from speech_event.adapters.system_clock import SystemClock
-    from speech_event.config import SpeechEventConfig, apply_overrides, load_config, parse_config
-    from speech_event.errors import ConfigError, GrammarError, ModelError, StorageError
-    from speech_event.grammar import Grammar, load_grammar, requested_grammar
-    from speech_event.messages import (
-        RECOGNISE_SPEECH,
-        SET_ENABLED,
-        SET_GRAMMAR,
-        SET_LANGUAGE,
-        DiagnosticArray,
-        DiagnosticStatus,
-        Float32MultiArray,
-        KeyValue,
-        MultiArrayDimension,
-        MultiArrayLayout,
-        RecogniseSpeechFeedback,
-        RecogniseSpeechGoal,
-        RecogniseSpeechResult,
-        SetEnabledRequest,
-        SetEnabledResponse,
-        SetGrammarRequest,
-        SetGrammarResponse,
-        SetLanguageRequest,
-        SetLanguageResponse,
-        String,
-        TranscriptMessage,
-    )
-    from speech_event.node import SpeechEventNode
-    from speech_event.ports import (
-        ActionGoal,
-        Audio,
-        Cancellable,
-        Clock,
-        Executor,
-        Grammars,
-        Incremental,
-        Publisher,
-        PublisherStatus,
-        Recognizer,
-        Stoppable,
-        Timer,
-        Transcript,
-        Transport,
-    )
-    from speech_event.recognizers import RECOGNIZERS, RecognizerFactory, engine_builder
-    from speech_event.topics import (
-        PARTIAL_TOPIC,
-        SIGNAL_TOPIC,
-        SOUND_DETECTION_DOWN,
-        SPEECH_NOT_RECOGNIZED,
-        TEXT_TOPIC,
-        TRANSCRIPT_TOPIC,
-    )
+if TYPE_CHECKING:  # for type checkers (``X as X``: re-exported); at run time, see _PUBLIC
+    from speech_event.adapters.executors import ClockExecutor as ClockExecutor
+    from speech_event.adapters.executors import ThreadExecutor as ThreadExecutor
+    from speech_event.adapters.fake_clock import FakeClock as FakeClock
+    from speech_event.adapters.memory_bus import InMemoryBus as InMemoryBus
+    from speech_event.adapters.system_clock import SystemClock as SystemClock
+    from speech_event.config import SpeechEventConfig as SpeechEventConfig
+    from speech_event.config import apply_overrides as apply_overrides
+    from speech_event.config import load_config as load_config
+    from speech_event.config import parse_config as parse_config
+    from speech_event.errors import ConfigError as ConfigError
+    from speech_event.errors import GrammarError as GrammarError
+    from speech_event.errors import ModelError as ModelError
+    from speech_event.errors import StorageError as StorageError
+    from speech_event.grammar import Grammar as Grammar
+    from speech_event.grammar import load_grammar as load_grammar
+    from speech_event.grammar import requested_grammar as requested_grammar
+    from speech_event.messages import RECOGNISE_SPEECH as RECOGNISE_SPEECH
+    from speech_event.messages import SET_ENABLED as SET_ENABLED
+    from speech_event.messages import SET_GRAMMAR as SET_GRAMMAR
+    from speech_event.messages import SET_LANGUAGE as SET_LANGUAGE
+    from speech_event.messages import DiagnosticArray as DiagnosticArray
+    from speech_event.messages import DiagnosticStatus as DiagnosticStatus
+    from speech_event.messages import Float32MultiArray as Float32MultiArray
+    from speech_event.messages import KeyValue as KeyValue
+    from speech_event.messages import MultiArrayDimension as MultiArrayDimension
+    from speech_event.messages import MultiArrayLayout as MultiArrayLayout
+    from speech_event.messages import RecogniseSpeechFeedback as RecogniseSpeechFeedback
+    from speech_event.messages import RecogniseSpeechGoal as RecogniseSpeechGoal
+    from speech_event.messages import RecogniseSpeechResult as RecogniseSpeechResult
+    from speech_event.messages import SetEnabledRequest as SetEnabledRequest
+    from speech_event.messages import SetEnabledResponse as SetEnabledResponse
+    from speech_event.messages import SetGrammarRequest as SetGrammarRequest
+    from speech_event.messages import SetGrammarResponse as SetGrammarResponse
+    from speech_event.messages import SetLanguageRequest as SetLanguageRequest
+    from speech_event.messages import SetLanguageResponse as SetLanguageResponse
+    from speech_event.messages import String as String
+    from speech_event.messages import TranscriptMessage as TranscriptMessage
+    from speech_event.node import SpeechEventNode as SpeechEventNode
+    from speech_event.ports import ActionGoal as ActionGoal
+    from speech_event.ports import Audio as Audio
+    from speech_event.ports import Cancellable as Cancellable
+    from speech_event.ports import Clock as Clock
+    from speech_event.ports import Executor as Executor
+    from speech_event.ports import Grammars as Grammars
+    from speech_event.ports import Incremental as Incremental
+    from speech_event.ports import Publisher as Publisher
+    from speech_event.ports import PublisherStatus as PublisherStatus
+    from speech_event.ports import Recognizer as Recognizer
+    from speech_event.ports import Stoppable as Stoppable
+    from speech_event.ports import Timer as Timer
+    from speech_event.ports import Transcript as Transcript
+    from speech_event.ports import Transport as Transport
+    from speech_event.recognizers import RECOGNIZERS as RECOGNIZERS
+    from speech_event.recognizers import RecognizerFactory as RecognizerFactory
+    from speech_event.recognizers import engine_builder as engine_builder
+    from speech_event.topics import PARTIAL_TOPIC as PARTIAL_TOPIC
+    from speech_event.topics import SIGNAL_TOPIC as SIGNAL_TOPIC
+    from speech_event.topics import SOUND_DETECTION_DOWN as SOUND_DETECTION_DOWN
+    from speech_event.topics import SPEECH_NOT_RECOGNIZED as SPEECH_NOT_RECOGNIZED
+    from speech_event.topics import TEXT_TOPIC as TEXT_TOPIC
+    from speech_event.topics import TRANSCRIPT_TOPIC as TRANSCRIPT_TOPIC
 
-# Imported on first use, so that importing speech_event (or the ROS classes genpy builds in it,
-# speech_event.srv and speech_event.msg, as rosservice does under the system Python) needs no numpy.
-_EXPORTS: Dict[str, str] = {
-    "ActionGoal": "speech_event.ports",
-    "apply_overrides": "speech_event.config",
-    "Audio": "speech_event.ports",
-    "Cancellable": "speech_event.ports",
-    "Clock": "speech_event.ports",
-    "ClockExecutor": "speech_event.adapters.executors",
-    "ConfigError": "speech_event.errors",
-    "DiagnosticArray": "speech_event.messages",
-    "DiagnosticStatus": "speech_event.messages",
-    "engine_builder": "speech_event.recognizers",
-    "Executor": "speech_event.ports",
-    "FakeClock": "speech_event.adapters.fake_clock",
-    "Float32MultiArray": "speech_event.messages",
-    "Grammar": "speech_event.grammar",
-    "GrammarError": "speech_event.errors",
-    "Grammars": "speech_event.ports",
-    "Incremental": "speech_event.ports",
-    "InMemoryBus": "speech_event.adapters.memory_bus",
-    "KeyValue": "speech_event.messages",
-    "load_config": "speech_event.config",
-    "load_grammar": "speech_event.grammar",
-    "ModelError": "speech_event.errors",
-    "MultiArrayDimension": "speech_event.messages",
-    "MultiArrayLayout": "speech_event.messages",
-    "parse_config": "speech_event.config",
-    "PARTIAL_TOPIC": "speech_event.topics",
-    "Publisher": "speech_event.ports",
-    "PublisherStatus": "speech_event.ports",
-    "RECOGNISE_SPEECH": "speech_event.messages",
-    "RecogniseSpeechFeedback": "speech_event.messages",
-    "RecogniseSpeechGoal": "speech_event.messages",
-    "RecogniseSpeechResult": "speech_event.messages",
-    "Recognizer": "speech_event.ports",
-    "RecognizerFactory": "speech_event.recognizers",
-    "RECOGNIZERS": "speech_event.recognizers",
-    "requested_grammar": "speech_event.grammar",
-    "SET_ENABLED": "speech_event.messages",
-    "SET_GRAMMAR": "speech_event.messages",
-    "SET_LANGUAGE": "speech_event.messages",
-    "SetEnabledRequest": "speech_event.messages",
-    "SetEnabledResponse": "speech_event.messages",
-    "SetGrammarRequest": "speech_event.messages",
-    "SetGrammarResponse": "speech_event.messages",
-    "SetLanguageRequest": "speech_event.messages",
-    "SetLanguageResponse": "speech_event.messages",
-    "SIGNAL_TOPIC": "speech_event.topics",
-    "SOUND_DETECTION_DOWN": "speech_event.topics",
-    "SPEECH_NOT_RECOGNIZED": "speech_event.topics",
-    "SpeechEventConfig": "speech_event.config",
-    "SpeechEventNode": "speech_event.node",
-    "Stoppable": "speech_event.ports",
-    "StorageError": "speech_event.errors",
-    "String": "speech_event.messages",
-    "SystemClock": "speech_event.adapters.system_clock",
-    "TEXT_TOPIC": "speech_event.topics",
-    "ThreadExecutor": "speech_event.adapters.executors",
-    "Timer": "speech_event.ports",
-    "Transcript": "speech_event.ports",
-    "TRANSCRIPT_TOPIC": "speech_event.topics",
-    "TranscriptMessage": "speech_event.messages",
-    "Transport": "speech_event.ports",
+# The public names by the module each comes from, imported on first use so that importing
+# speech_event (or the ROS classes genpy builds in it, speech_event.srv and speech_event.msg, as
+# rosservice does under the system Python) needs no numpy. The same names as the TYPE_CHECKING
+# imports above: tests/test_public_api.py keeps the two equal.
+_PUBLIC: Dict[str, Tuple[str, ...]] = {
+    "speech_event.adapters.executors": ("ClockExecutor", "ThreadExecutor"),
+    "speech_event.adapters.fake_clock": ("FakeClock",),
+    "speech_event.adapters.memory_bus": ("InMemoryBus",),
+    "speech_event.adapters.system_clock": ("SystemClock",),
+    "speech_event.config": ("SpeechEventConfig", "apply_overrides", "load_config", "parse_config"),
+    "speech_event.errors": ("ConfigError", "GrammarError", "ModelError", "StorageError"),
+    "speech_event.grammar": ("Grammar", "load_grammar", "requested_grammar"),
+    "speech_event.messages": (
+        "RECOGNISE_SPEECH",
+        "SET_ENABLED",
+        "SET_GRAMMAR",
+        "SET_LANGUAGE",
+        "DiagnosticArray",
+        "DiagnosticStatus",
+        "Float32MultiArray",
+        "KeyValue",
+        "MultiArrayDimension",
+        "MultiArrayLayout",
+        "RecogniseSpeechFeedback",
+        "RecogniseSpeechGoal",
+        "RecogniseSpeechResult",
+        "SetEnabledRequest",
+        "SetEnabledResponse",
+        "SetGrammarRequest",
+        "SetGrammarResponse",
+        "SetLanguageRequest",
+        "SetLanguageResponse",
+        "String",
+        "TranscriptMessage",
+    ),
+    "speech_event.node": ("SpeechEventNode",),
+    "speech_event.ports": (
+        "ActionGoal",
+        "Audio",
+        "Cancellable",
+        "Clock",
+        "Executor",
+        "Grammars",
+        "Incremental",
+        "Publisher",
+        "PublisherStatus",
+        "Recognizer",
+        "Stoppable",
+        "Timer",
+        "Transcript",
+        "Transport",
+    ),
+    "speech_event.recognizers": ("RECOGNIZERS", "RecognizerFactory", "engine_builder"),
+    "speech_event.topics": (
+        "PARTIAL_TOPIC",
+        "SIGNAL_TOPIC",
+        "SOUND_DETECTION_DOWN",
+        "SPEECH_NOT_RECOGNIZED",
+        "TEXT_TOPIC",
+        "TRANSCRIPT_TOPIC",
+    ),
 }
-
-__all__ = [
-    "PARTIAL_TOPIC",
-    "RECOGNISE_SPEECH",
-    "RECOGNIZERS",
-    "SET_ENABLED",
-    "SET_GRAMMAR",
-    "SET_LANGUAGE",
-    "SIGNAL_TOPIC",
-    "SOUND_DETECTION_DOWN",
-    "SPEECH_NOT_RECOGNIZED",
-    "TEXT_TOPIC",
-    "TRANSCRIPT_TOPIC",
-    "ActionGoal",
-    "Audio",
-    "Cancellable",
-    "Clock",
-    "ClockExecutor",
-    "ConfigError",
-    "DiagnosticArray",
-    "DiagnosticStatus",
-    "Executor",
-    "FakeClock",
-    "Float32MultiArray",
-    "Grammar",
-    "GrammarError",
-    "Grammars",
-    "InMemoryBus",
-    "Incremental",
-    "KeyValue",
-    "ModelError",
-    "MultiArrayDimension",
-    "MultiArrayLayout",
-    "Publisher",
-    "PublisherStatus",
-    "RecogniseSpeechFeedback",
-    "RecogniseSpeechGoal",
-    "RecogniseSpeechResult",
-    "Recognizer",
-    "RecognizerFactory",
-    "SetEnabledRequest",
-    "SetEnabledResponse",
-    "SetGrammarRequest",
-    "SetGrammarResponse",
-    "SetLanguageRequest",
-    "SetLanguageResponse",
-    "SpeechEventConfig",
-    "SpeechEventNode",
-    "Stoppable",
-    "StorageError",
-    "String",
-    "SystemClock",
-    "ThreadExecutor",
-    "Timer",
-    "Transcript",
-    "TranscriptMessage",
-    "Transport",
-    "apply_overrides",
-    "engine_builder",
-    "load_config",
-    "load_grammar",
-    "parse_config",
-    "requested_grammar",
-]
+_EXPORTS: Dict[str, str] = {name: module for module, names in _PUBLIC.items() for name in names}
+__all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str) -> Any:

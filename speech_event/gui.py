@@ -259,11 +259,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         "--font-size", type=int, default=28, help="points (default 28: readable across a room)"
     )
     arguments = parser.parse_args(without_remappings(argv))  # roslaunch adds __name:= and __log:=
-    import rospy
+    from speech_event.adapters.ros import RosTransport, call_service, start_anonymous_node
 
-    from speech_event.adapters.ros import RosTransport, call_service
-
-    rospy.init_node("speechEventGui", anonymous=True)
+    start_anonymous_node("speechEventGui")
     root = tk.Tk()
     window = TranscriptWindow(root, RosTransport(), call_service, arguments.font_size)
     window.poll()

@@ -8,62 +8,46 @@ same object runs on the in-memory bus, on a real roscore, and on the robot.
 
 This module is the wiring. The steps live in ``speech_event.pipeline``, the robot's interfaces
 around them in ``speech_event.interfaces``, and the rules in modules of their own: when an
-utterance ends (``turn_taking``), when to speculate (``speculation``), when to publish a partial
-text (``partials``), the recognition timeout (``watchdog``) and the periodic checks (``health``).
-They are called under the node's lock.
+utterance ends (``turn_taking``), what the worker does for the utterance still being collected
+(``background_runs``: speculations and partial results), the recognition timeout (``watchdog``)
+and the periodic checks (``health``). They are called under the node's lock.
 """
 
-import functools
 import logging
 import threading
 import time
-from pathlib import Path
 from typing import Callable, Dict, Optional, Tuple
 
+from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.config import SpeechEventConfig
-from speech_event.errors import ConfigError, GrammarError
-from speech_event.grammar import FREE_SPEECH, Grammar, load_grammar
+from speech_event.grammar import FREE_SPEECH, Grammar
 from speech_event.health import Health
 from speech_event.interfaces.action import ACTION_NAME, DISABLED, ListenAction
-from speech_event.interfaces.diagnostics import (
-    DISCARDED_BACKLOG,
-    DISCARDED_WHILE_DISABLED,
-    NodeState,
-    NodeStatistics,
-)
+from speech_event.interfaces.diagnostics import DISCARDED_WHILE_DISABLED, NodeState, NodeStatistics
 from speech_event.interfaces.language_engines import EngineBuilder, LanguageEngines
 from speech_event.interfaces.services import (
     SET_ENABLED_SERVICE,
     SET_GRAMMAR_SERVICE,
     SET_LANGUAGE_SERVICE,
     RuntimeControl,
-    cannot_use,
+    starting_grammar,
 )
 from speech_event.interfaces.storage import store_for
 from speech_event.messages import RECOGNISE_SPEECH, SET_ENABLED, SET_GRAMMAR, SET_LANGUAGE, Float32MultiArray
-from speech_event.partials import PartialCounts, PartialFeed, PartialRules
+from speech_event.partials import PartialCounts
 from speech_event.pipeline.assembly import UtteranceAssembler
+from speech_event.pipeline.closed_utterances import ClosedUtterances
 from speech_event.pipeline.publication import Publication, TextOrigin
 from speech_event.pipeline.recognition import Recognition
-from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome, RecognitionQueue
+from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
-from speech_event.ports import (
-    Audio,
-    Clock,
-    Executor,
-    Incremental,
-    PublisherStatus,
-    Recognizer,
-    Stoppable,
-    Timer,
-    Transcript,
-    Transport,
-)
-from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules
+from speech_event.pipeline.worker import Worker
+from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Transport
+from speech_event.speculation import SpeculationCounts
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
-from speech_event.turn_taking import RearmingTimer, TurnTaking
+from speech_event.turn_taking import TurnTaking
 from speech_event.watchdog import Watchdog
 
 _LOG = logging.getLogger("speech_event")
@@ -90,9 +74,7 @@ class SpeechEventNode:
         self._config = config
         self._transport = transport
         self._clock = clock
-        self._executor = executor
         screen = screen or speech_screen_for(config)
-        self._recognition = Recognition(config.sample_rate, screen, stopwatch)
         self._max_samples = int(config.max_message_length * config.sample_rate)
         self._assembler = UtteranceAssembler(
             config.sample_rate, config.max_utterance_length, screen.non_speech
@@ -100,8 +82,6 @@ class SpeechEventNode:
         self._rejections = RejectionLog(clock.now, SIGNAL_TOPIC)
         self._store = store_for(config)
         self._statistics = NodeStatistics()
-        self._queue = RecognitionQueue(config.max_backlog)
-        self._running: Optional[RecognitionJob] = None  # the utterance being recognized
         self._action = ListenAction(clock, self._refusal)
         self._publication = Publication(config, self._statistics, self._action, self._store, clock.now)
         self._control = RuntimeControl(
@@ -117,17 +97,24 @@ class SpeechEventNode:
         self._lock = threading.Lock()
         self._language = config.language
         self._recognizer = recognizer
-        self._grammar = _configured_grammar(config, recognizer)
+        self._grammar = starting_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
-        self._turn = TurnTaking(config, clock, self._lock, self._close_utterance, self._maybe_speculate)
-        self._speculation = SpeculationRules(config)
-        self.speculations: SpeculationCounts = self._speculation.counts  # how speculation fared
-        self._partials = PartialRules(config)
-        self.partials: PartialCounts = self._partials.counts  # how partial results fared
-        self._partial_timer = RearmingTimer(clock, self._lock, self._partials.due, self._maybe_partial)
-        self._stopwatch = stopwatch
+        self._turn = TurnTaking(
+            config, clock, self._lock, self._close_utterance, lambda: self._background.speculate()
+        )
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
+        recognition = Recognition(config.sample_rate, screen, stopwatch)
+        worker = Worker(executor, recognition, stopwatch, self._publication, self._watchdog)
+        self._queue = RecognitionQueue(config.max_backlog)
+        self._closed = ClosedUtterances(
+            self._queue, self._lock, worker, lambda: self._background.worker_free()
+        )
+        self._background = BackgroundRuns(
+            config, clock, self._lock, worker, self._turn, self._so_far, self._closed.idle
+        )
+        self.speculations: SpeculationCounts = self._background.speculations  # how speculation fared
+        self.partials: PartialCounts = self._background.partials  # how partial results fared
         self._health = Health(
             config, transport, clock, self._statistics, self._state, self._sound_detection_down
         )
@@ -198,9 +185,7 @@ class SpeechEventNode:
         self._health.stop()
         with self._lock:
             self._turn.stop()
-            self._speculation.drop()
-            self._partials.drop()
-            self._partial_timer.cancel()
+            self._background.stop()
 
     def flush_storage(self) -> None:
         """Wait until every utterance transcribed so far is stored (when storing is on)."""
@@ -229,128 +214,39 @@ class SpeechEventNode:
                 self._rejections.record_clipped(signal.clipped)
             arrival = self._clock.now()
             self._turn.end_pause_if_over()  # first: a speculation on the utterance it ends still counts
-            self._speculation.drop()  # more audio: what it transcribed is not the utterance
+            self._background.more_audio()
             if self._assembler.pending_samples == 0:
                 self._collecting_since = arrival
                 self._action.utterance_started(arrival)
-                self._partials.begin(arrival)
+                self._background.utterance_started(arrival)
             completed = self._assembler.add(signal.samples)
-            if completed:  # cut at the length limit: what is left is a new utterance to speculate on
-                self._speculation.new_utterance()
             for index, utterance in enumerate(completed):
                 # Cut at the length limit: the speech goes on in the next utterance.
                 more_follows = index < len(completed) - 1 or self._assembler.pending_samples > 0
                 self._submit(utterance, more_follows, arrival)
             if completed:
-                self._partials.begin(arrival)  # what is left is a new utterance
+                self._background.utterance_cut(arrival)
             self._turn.heard(arrival)
-            if self._partials.on:
-                self._partial_timer.arm()
+            self._background.heard()
 
     def _close_utterance(self) -> None:
         """Under the lock: the pause after the utterance being collected has passed."""
-        self._speculation.new_utterance()
-        self._partial_timer.cancel()
+        self._background.utterance_closed()
         utterance = self._assembler.close()
         if utterance is not None:
             self._submit(utterance, False, self._turn.last_arrival)
 
-    # -- speculative recognition (speech_event/speculation.py) ------------------------------------
-
-    def _maybe_speculate(self) -> None:
-        """Under the lock: speculate on the utterance being collected if its gap has passed and the
-        rules allow it now."""
-        idle = self._worker_idle()
-        collecting = self._enabled and self._assembler.pending_samples > 0 and self._turn.gap_passed()
-        if not (collecting and self._speculation.may_start(self._recognizer, idle)):
-            return
-        self._partials.drop()  # a speculation comes before a partial: it may be the final text
-        audio = self._assembler.peek()
-        speculation = self._speculation.start(audio.size, self._recognizer, self._grammar)
-        speculation.handle = self._executor.submit(functools.partial(self._speculate, speculation, audio))
-
-    def _worker_idle(self) -> bool:
-        """Under the lock: no closed utterance is being recognized or waits for it."""
-        return self._running is None and self._queue.waiting == 0
-
-    def _recognize_unless_cancelled(self, run: Speculation, audio: Audio) -> Optional[RecognitionOutcome]:
-        """On the worker: ``run``'s recognition of ``audio``; None when it was cancelled before."""
-        with self._lock:
-            if run.cancelled:
-                return None
-            run.running = True
-        return self._recognition(audio, run.recognizer, run.grammar)
-
-    def _speculate(self, speculation: Speculation, audio: Audio) -> None:
-        """An executor job: transcribe the utterance so far; publish it only if it closed as it is."""
-        outcome = self._recognize_unless_cancelled(speculation, audio)
-        if outcome is None:
-            return
-        partial: Optional[Transcript] = None
-        with self._lock:
-            job = self._speculation.finished(speculation, outcome)
-            if job is None:
-                if self._speculation.ends_turn(speculation):
-                    self._turn.end_early()
-                if not speculation.cancelled:  # the utterance so far: its text is a partial too
-                    partial = self._partials.spoken(speculation.samples, outcome.answer)
-                origin = self._origin()
-        if job is not None:
-            self._publication.conclude(job, outcome)
-        elif partial is not None:
-            self._publication.partial(partial, origin)
-
-    # -- partial results (speech_event/partials.py) -----------------------------------------------
-
-    def _maybe_partial(self) -> None:
-        """Under the lock: ask for the text of the utterance so far if a partial is due and the
-        worker is idle (no closed utterance, no speculation)."""
-        idle = self._worker_idle() and self._speculation.current is None
-        pending, now = self._assembler.pending_samples, self._clock.now()
-        if not (self._enabled and self._partials.may_start(self._recognizer, idle, pending, now)):
-            return
-        audio, origin = self._assembler.peek(), self._origin()
-        if isinstance(self._recognizer, Stoppable):
-            run = self._partials.start_run(audio.size, self._recognizer, self._grammar, now)
-            run.handle = self._executor.submit(functools.partial(self._partial_run, run, audio, origin))
-        elif isinstance(self._recognizer, Incremental):
-            feed = self._partials.start_feed(self._recognizer, self._grammar, now)
-            job = functools.partial(self._partial_feed, feed, audio[feed.fed :], origin)
-            feed.fed, feed.handle = audio.size, self._executor.submit(job)
-
-    def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
-        """An executor job: a Stoppable engine's text of the utterance so far."""
-        outcome = self._recognize_unless_cancelled(run, audio)
-        if outcome is None:
-            return
-        with self._lock:
-            partial = self._partials.finished(run, outcome)
-            self._maybe_partial()  # more audio came meanwhile
-        if partial is not None:
-            self._publication.partial(partial, origin)
-
-    def _partial_feed(self, feed: PartialFeed, audio: Audio, origin: TextOrigin) -> None:
-        """An executor job: an Incremental engine fed the new audio of the utterance so far."""
-        began = self._stopwatch()
-        try:
-            answer = feed.feed(audio)
-        except (Exception, SystemExit):  # no partial; the final recognition says what failed
-            _LOG.debug("a partial result failed", exc_info=True)
-            answer = None
-        with self._lock:
-            partial = self._partials.fed(feed, answer, self._stopwatch() - began)
-            self._maybe_partial()  # more audio came meanwhile
-        if partial is not None:
-            self._publication.partial(partial, origin)
-
-    def _origin(self) -> TextOrigin:
-        """Under the lock: the origin of a text of the utterance collected so far."""
-        first = self._collecting_since if self._collecting_since is not None else self._turn.last_arrival
-        return TextOrigin(self._language, type(self._recognizer).__name__, first, self._turn.last_arrival)
+    def _so_far(self) -> Optional[UtteranceSoFar]:
+        """Under the lock: the utterance being collected, None when there is none (or disabled)."""
+        pending, last = self._assembler.pending_samples, self._turn.last_arrival
+        if not self._enabled or pending == 0:
+            return None
+        first = self._collecting_since if self._collecting_since is not None else last
+        origin = TextOrigin(self._language, type(self._recognizer).__name__, first, last)
+        return UtteranceSoFar(pending, self._assembler.peek, self._recognizer, self._grammar, origin)
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:
         """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
-        self._partials.drop()  # the worker is wanted; no final text waits for a partial
         self._utterances += 1
         number, closed_at, recognizer = self._utterances, self._clock.now(), self._recognizer
         started_at = self._collecting_since if self._collecting_since is not None else closed_at
@@ -370,44 +266,12 @@ class SpeechEventNode:
             seconds,
             self._grammar,
         )
-        speculation = self._speculation.adopt(job)
-        if speculation is not None:
-            if speculation.outcome is None:  # still running: its recognition starts now, as it were
-                speculation.watchdog = self._watchdog.watch(job)
-            else:  # on the clock's next turn: the worker is idle (see SpeculationRules.adopt)
-                conclude = functools.partial(self._publication.conclude, job, speculation.outcome)
-                self._clock.call_at(closed_at, conclude)
-            return
-        for dropped in self._queue.put(job):
-            self._statistics.finished(dropped.seconds)
-            self._statistics.discarded(DISCARDED_BACKLOG)
-            self._action.utterance_done(dropped.number, None)
-        self._executor.submit(self._run_next)
-
-    # -- resample -> screen -> recognize -> publish (on the executor) -------------------------------
-
-    def _run_next(self) -> None:
-        """One executor job: the oldest waiting utterance (none when it was dropped), watched."""
-        watchdog: Optional[Timer] = None
-        with self._lock:
-            job = self._queue.take()
-            if job is None:
-                return
-            self._running = job
-            watchdog = self._watchdog.watch(job)
-        try:
-            self._publication.conclude(job, self._recognition(job.audio, job.recognizer, job.grammar))
-        finally:
-            with self._lock:
-                self._running = None
-                if watchdog is not None:
-                    watchdog.cancel()
-                self._maybe_speculate()  # the utterance being collected waited for this one
-                self._maybe_partial()
+        if not self._background.adopt(job):
+            self._closed.put(job)
 
     def _still_running(self, job: RecognitionJob) -> bool:
         """Under the lock: whether ``job``'s recognition runs now (on the worker, or speculated)."""
-        return self._running is job or self._speculation.running_for(job)
+        return self._closed.running is job or self._background.running_for(job)
 
     # -- runtime control --------------------------------------------------------------------------
 
@@ -420,10 +284,7 @@ class SpeechEventNode:
             changed = enabled != self._enabled
             self._enabled = enabled
             if not enabled:
-                self._speculation.drop()
-                self._speculation.new_utterance()
-                self._partials.drop()
-                self._partial_timer.cancel()
+                self._background.drop_utterance()
                 self._turn.drop_turn()
                 if self._assembler.close() is not None:
                     self._statistics.discarded(DISCARDED_WHILE_DISABLED)
@@ -437,16 +298,14 @@ class SpeechEventNode:
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         with self._lock:  # utterances closed before this finish with the old engine
             self._turn.end_pause_if_over()
-            self._speculation.drop()
-            self._partials.drop()
+            self._background.drop()
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
         with self._lock:  # utterances closed before this finish with the old grammar
             self._turn.end_pause_if_over()
-            self._speculation.drop()
-            self._partials.drop()
+            self._background.drop()
             self._grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)
 
@@ -487,17 +346,3 @@ class SpeechEventNode:
                 partials_published=self.partials.published,
                 partial_seconds=self.partials.worker_seconds,
             )
-
-
-def _configured_grammar(config: SpeechEventConfig, recognizer: Recognizer) -> Optional[Grammar]:
-    """The ``grammar`` key's grammar, checked against the engine; None for free speech."""
-    if not config.grammar:
-        return None
-    try:
-        grammar = load_grammar(Path(config.grammar))
-    except GrammarError as problem:
-        raise ConfigError(f"grammar: {problem}") from None
-    reason = cannot_use(recognizer, grammar)
-    if reason is not None:
-        raise ConfigError(f"grammar {config.grammar}: {reason}")
-    return grammar

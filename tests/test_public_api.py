@@ -1,5 +1,6 @@
 """What a program embedding the node imports from ``speech_event`` itself is enough to run it."""
 
+import ast
 import subprocess
 import sys
 from typing import List
@@ -51,4 +52,24 @@ def test_importing_the_package_imports_no_numpy_so_ros_tools_under_the_system_py
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
     )
     assert result.stdout == "[]\n"
-    assert sorted(speech_event.__all__) == sorted(speech_event._EXPORTS)
+
+
+def test_the_imports_for_type_checkers_name_exactly_the_public_names_each_from_its_module() -> None:
+    """The package lists its public names once, in the lazy map that ``__all__`` is computed from;
+    type checkers read its TYPE_CHECKING imports instead, which must name the same, each
+    re-exported as itself."""
+    tree = ast.parse((ROOT / "speech_event" / "__init__.py").read_text(encoding="utf-8"))
+    (block,) = [
+        node
+        for node in tree.body
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"
+    ]
+    assert all(isinstance(statement, ast.ImportFrom) for statement in block.body)
+    imported = [
+        (statement.module, alias.name, alias.asname)
+        for statement in block.body
+        if isinstance(statement, ast.ImportFrom)
+        for alias in statement.names
+    ]
+    assert sorted(imported) == sorted((module, name, name) for name, module in speech_event._EXPORTS.items())
+    assert speech_event.__all__ == sorted(speech_event._EXPORTS)

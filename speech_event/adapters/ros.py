@@ -441,6 +441,12 @@ def start_ros_node(name: str, verbose: bool) -> None:
     logger.propagate = False  # rosout prints them already
 
 
+def start_anonymous_node(name: str) -> None:
+    """Register this process with the master as ``name`` with a unique suffix (several windows may
+    run at once)."""
+    rospy.init_node(name, anonymous=True)
+
+
 def _register_everything() -> None:
     from rospy.impl.registration import (
         Registration,

@@ -16,10 +16,12 @@ says why, and the grammar in force stays. Utterances closed before the switch fi
 """
 
 import logging
+from pathlib import Path
 from typing import Callable, Optional, Tuple
 
-from speech_event.errors import GrammarError, ModelError
-from speech_event.grammar import FREE_SPEECH, Grammar, requested_grammar
+from speech_event.config import SpeechEventConfig
+from speech_event.errors import ConfigError, GrammarError, ModelError
+from speech_event.grammar import FREE_SPEECH, Grammar, load_grammar, requested_grammar
 from speech_event.interfaces.language_engines import LanguageEngines
 from speech_event.messages import SetEnabledResponse, SetGrammarResponse, SetLanguageResponse
 from speech_event.ports import Grammars, Recognizer
@@ -133,6 +135,21 @@ def cannot_use(engine: Recognizer, grammar: Grammar) -> Optional[str]:
     except GrammarError as problem:
         return str(problem)
     return None
+
+
+def starting_grammar(config: SpeechEventConfig, recognizer: Recognizer) -> Optional[Grammar]:
+    """The grammar in force when the node starts: the ``grammar`` key's, checked against the engine
+    as set_grammar checks one; None for free speech. ConfigError when it cannot be read or used."""
+    if not config.grammar:
+        return None
+    try:
+        grammar = load_grammar(Path(config.grammar))
+    except GrammarError as problem:
+        raise ConfigError(f"grammar: {problem}") from None
+    reason = cannot_use(recognizer, grammar)
+    if reason is not None:
+        raise ConfigError(f"grammar {config.grammar}: {reason}")
+    return grammar
 
 
 def _allowed(request: object, field: str, allowed: Tuple[str, ...], service: str) -> Optional[str]:

@@ -38,7 +38,9 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 from speech_event.errors import ModelError
 from speech_event.recognizers.nemo.manifest import CTC, RNNT, TDT, load_manifest
 from speech_event.recognizers.nemo.vocabulary import load_vocabulary
-from speech_event.recognizers.onnx.directory import MANIFEST_FILE, WHISPER_FAMILY, family_of
+from speech_event.recognizers.onnx.directory import MANIFEST_FILE
+from speech_event.recognizers.onnx.families import family_of
+from speech_event.recognizers.whisper.manifest import WHISPER
 from speech_event.recognizers.whisper.optimum_layout import load_optimum_manifest, load_optimum_pieces
 
 # Known names -> Hugging Face repositories: onnx-asr's names of the NeMo exports, and the Whisper
@@ -289,7 +291,7 @@ def _family(directory: Path, layout: Layout, int8: bool) -> str:
     if layout is WHISPER_OPTIMUM:
         manifest = load_optimum_manifest(directory)
         load_optimum_pieces(directory, manifest.vocabulary_size)
-        return family_of(directory, unrecorded=WHISPER_FAMILY)
+        return family_of(directory, unrecorded=WHISPER)
     load_vocabulary(directory / "vocab.txt")
     return load_manifest(directory / MANIFEST_FILE).family
 

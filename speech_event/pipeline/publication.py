@@ -6,11 +6,11 @@ with its confidence, language, engine and the times of its utterance's blocks.""
 import functools
 import logging
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Callable, Optional, Protocol
 
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.action import ListenAction
-from speech_event.interfaces.diagnostics import NodeStatistics
+from speech_event.interfaces.diagnostics import DISCARDED_BACKLOG, NodeStatistics
 from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
 from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, String, TranscriptMessage
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
@@ -29,6 +29,16 @@ class TextOrigin:
     engine: str  # the engine's class name
     first_block: float  # when the utterance's first block arrived (NO_UTTERANCE: no utterance)
     last_block: float  # when its last block, so far for a partial, arrived
+
+
+class Publishes(Protocol):
+    """What the recognition worker's jobs end in: Publication, or a test's recorder."""
+
+    def conclude(self, job: RecognitionJob, outcome: RecognitionOutcome) -> None: ...
+
+    def dropped(self, job: RecognitionJob) -> None: ...
+
+    def partial(self, transcript: Transcript, origin: TextOrigin) -> None: ...
 
 
 @dataclass
@@ -83,6 +93,12 @@ class Publication:
             last_block=origin.last_block,
         )
         self._transcript.publish(message)
+
+    def dropped(self, job: RecognitionJob) -> None:
+        """``job`` was dropped unrecognized to keep within max_backlog: counted, and the action told."""
+        self.statistics.finished(job.seconds)
+        self.statistics.discarded(DISCARDED_BACKLOG)
+        self.action.utterance_done(job.number, None)
 
     def conclude(self, job: RecognitionJob, outcome: RecognitionOutcome) -> None:
         """Publish what recognition made of ``job``, tell the action, store it."""

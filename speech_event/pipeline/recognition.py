@@ -13,6 +13,9 @@ from speech_event.pipeline.resample import resample
 from speech_event.pipeline.screen import SpeechScreen
 from speech_event.ports import Audio, Grammars, Recognizer
 
+# One utterance's audio recognized with an engine and a grammar (a Recognition, or a test's stand-in).
+Recognize = Callable[[Audio, Recognizer, Optional[Grammar]], RecognitionOutcome]
+
 
 class Recognition:
     """Audio at the node's rate in, what the engine made of it out, timed with ``stopwatch``."""

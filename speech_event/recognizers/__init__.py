@@ -17,7 +17,8 @@ from speech_event.grammar import Grammar, load_grammar
 from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES
-from speech_event.recognizers.onnx.directory import Runtime, family_of
+from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.manifest import WHISPER
 

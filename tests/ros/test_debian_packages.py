@@ -32,6 +32,7 @@ IMPORTED = (
     "harness.ros.stand_in",
     "harness.ros.checker",
     "harness.driver_node",
+    "harness.ros.driver_side",
     "tests.ros.conftest",
     "tests.helpers.two_hosts",
 )

@@ -22,6 +22,7 @@ from speech_event.recognizers.nemo.onnx_asr_layout import RNNT as RNNT
 from speech_event.recognizers.nemo.onnx_asr_layout import TDT as TDT
 from speech_event.recognizers.nemo.onnx_asr_layout import completed, decoding_of
 from speech_event.recognizers.onnx.directory import MANIFEST_FILE as MANIFEST_FILE
+from speech_event.recognizers.onnx.families import register_family
 
 DECODINGS = (RNNT, TDT, CTC)
 CONFORMER_TRANSDUCER, PARAKEET = "conformer-transducer", "parakeet"
@@ -125,13 +126,14 @@ def load_manifest(path: Path) -> Manifest:
         ) from None
 
 
-def family_of_directory(directory: Path) -> Optional[str]:
-    """The family of the NeMo model in ``directory``, as load_manifest reads it but reading no more
-    than that needs (its config.json's family, else its decoding's); None when it cannot be told."""
+def nemo_family_of(directory: Path, document: Dict[str, Any]) -> Optional[str]:
+    """The family of the NeMo model in ``directory`` whose config.json (``document``) does not record
+    it (onnx-asr's): its decoding's, read as load_manifest reads it but no further; None when the
+    directory is no NeMo model's, or it cannot be told."""
     try:
-        document = _document(directory / MANIFEST_FILE)
-        if "family" in document:
-            return str(document["family"])
         return FAMILY_OF_DECODING.get(decoding_of(document, directory))
     except (OSError, ValueError, ModelError):
         return None
+
+
+register_family(nemo_family_of)

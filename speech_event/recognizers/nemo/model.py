@@ -1,17 +1,4 @@
-"""The ONNX files of NeMo's exports, run with onnxruntime.
-
-A transducer (RNN-T or TDT) is two files:
-``encoder-model.onnx``: ``audio_signal`` float32 [B, features, T] and ``length`` int64 [B] ->
-``outputs`` [B, D, T'] and ``encoded_lengths`` [B].
-``decoder_joint-model.onnx``: ``encoder_outputs`` [B, D, 1], ``targets`` int32 [B, 1],
-``target_length`` int32 [B], ``input_states_1`` and ``input_states_2`` (LSTM h and c, [layers, B,
-hidden]) -> ``outputs`` (logits, last dimension V + 1, then TDT's durations), ``prednet_lengths``,
-``output_states_1``, ``output_states_2``.
-A CTC model (or a hybrid model's CTC head) is one file, ``model.onnx``: ``audio_signal`` and
-``length`` as above -> ``logprobs`` [B, T', V + 1].
-Each file may have an int8 version (``encoder-model.int8.onnx``, onnx-asr's name): the ``quantization``
-key picks it, and where only that one is there it is used (onnx/directory.py's Runtime).
-"""
+"""The ONNX files of NeMo's exports (onnx_files.py: their names and tensors), run with onnxruntime."""
 
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -19,24 +6,19 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import onnxruntime
 
-from speech_event.recognizers.nemo.onnx_asr_layout import CTC_FILE as CTC_FILE
-from speech_event.recognizers.nemo.onnx_asr_layout import DECODER_JOINT_FILE as DECODER_JOINT_FILE
-from speech_event.recognizers.nemo.onnx_asr_layout import ENCODER_FILE as ENCODER_FILE
-from speech_event.recognizers.nemo.onnx_asr_layout import NEMO_DIRECTORY as NEMO_DIRECTORY
+from speech_event.recognizers.nemo.onnx_files import (
+    CTC_FILE,
+    CTC_OUTPUTS,
+    DECODER_INPUTS,
+    DECODER_JOINT_FILE,
+    DECODER_OUTPUTS,
+    ENCODER_FILE,
+    ENCODER_INPUTS,
+    ENCODER_OUTPUTS,
+    NEMO_DIRECTORY,
+)
 from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime
 from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session, providers
-
-CTC_OUTPUTS = {"logprobs": 3}
-ENCODER_INPUTS = {"audio_signal": 3, "length": 1}
-ENCODER_OUTPUTS = {"outputs": 3, "encoded_lengths": 1}
-DECODER_INPUTS = {
-    "encoder_outputs": 3,
-    "targets": 2,
-    "target_length": 1,
-    "input_states_1": 3,
-    "input_states_2": 3,
-}
-DECODER_OUTPUTS = {"outputs": -1, "prednet_lengths": -1, "output_states_1": 3, "output_states_2": 3}
 
 LstmState = Tuple[np.ndarray, np.ndarray]
 

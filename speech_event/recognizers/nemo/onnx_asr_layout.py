@@ -25,19 +25,19 @@ from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
 
 from speech_event.errors import ModelError
+from speech_event.recognizers.nemo.onnx_files import (
+    CTC_FILE,
+    DECODER_JOINT_FILE,
+    DECODER_OUTPUTS,
+    ENCODER_FILE,
+    NEMO_DIRECTORY,
+)
 from speech_event.recognizers.nemo.vocabulary import load_vocabulary
 from speech_event.recognizers.onnx.directory import CPU_FP32, MANIFEST_FILE
 
 # onnx-asr's names of the decodings (its model_type)
 RNNT, TDT, CTC = "nemo-conformer-rnnt", "nemo-conformer-tdt", "nemo-conformer-ctc"
-ENCODER_FILE = "encoder-model.onnx"
-DECODER_JOINT_FILE = "decoder_joint-model.onnx"
-CTC_FILE = "model.onnx"
 VOCABULARY_FILE = "vocab.txt"
-NEMO_DIRECTORY = (
-    f"a model directory holds {ENCODER_FILE}, {DECODER_JOINT_FILE} (a transducer) or {CTC_FILE} (CTC), "
-    "vocab.txt and config.json (speech-event export-nemo MODEL.nemo DIR writes one)"
-)
 NEMO_DEFAULT_DURATIONS = (0, 1, 2, 3, 4)
 # NeMo's preprocessor at inference, as onnx-asr's nemo80 and nemo128 preprocessors compute it
 NEMO_PREPROCESSOR: Dict[str, Any] = {
@@ -118,7 +118,6 @@ def _extra_logits(directory: Path) -> Optional[int]:
     if not vocabulary.is_file():
         raise ModelError(f"{directory}: missing {VOCABULARY_FILE}; {NEMO_DIRECTORY}")
     # onnxruntime only now: the node imports this module without it
-    from speech_event.recognizers.nemo.model import DECODER_OUTPUTS
     from speech_event.recognizers.onnx.session import check_tensors, last_dimension, open_session
 
     path = CPU_FP32.model_file(directory, DECODER_JOINT_FILE)

@@ -1,8 +1,7 @@
-"""An exported model directory: a directory, not the framework's own file, whose config.json
-names the family it was exported from (every family writes one; for onnx-asr's directories, which
-do not, the family is derived); and which of its ONNX files an engine runs (fp32 or int8)."""
+"""An exported model directory: a directory, not the framework's own file, with its config.json
+(what it records is each family's; the family itself: families.py); and which of its ONNX files an
+engine runs (fp32 or int8)."""
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Union
@@ -10,9 +9,6 @@ from typing import Optional, Union
 from speech_event.errors import ModelError
 
 MANIFEST_FILE = "config.json"
-WHISPER_FAMILY = "whisper"
-# model_type in the config.json of Hugging Face's Whisper exports (optimum) and of onnx-asr's own
-WHISPER_MODEL_TYPES = ("whisper", "whisper-ort")
 
 
 def exported_directory(path: Union[str, Path], framework_suffix: str, export: str) -> Path:
@@ -27,29 +23,6 @@ def exported_directory(path: Union[str, Path], framework_suffix: str, export: st
     if not directory.is_dir():
         raise ModelError(f"{directory}: no such model directory")
     return directory
-
-
-def family_of(directory: Path, unrecorded: str) -> str:
-    """The family of a model directory, whatever its engine: its config.json's family; whisper for
-    a Whisper model of Hugging Face's or onnx-asr's (their model_type); for another that does not
-    record it (an onnx-asr NeMo directory, with or without config.json), the family the NeMo engine
-    reads in it; ``unrecorded`` when none of these says."""
-    try:
-        document = json.loads((directory / MANIFEST_FILE).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        document = {}
-    except (OSError, ValueError):
-        return unrecorded  # the engine says what is wrong with it
-    if not isinstance(document, dict):
-        return unrecorded
-    if "family" in document:
-        return str(document["family"])
-    if document.get("model_type") in WHISPER_MODEL_TYPES:
-        return WHISPER_FAMILY
-    # imported here: the NeMo manifest reads this module's MANIFEST_FILE
-    from speech_event.recognizers.nemo.manifest import family_of_directory
-
-    return family_of_directory(directory) or unrecorded
 
 
 # An int8 file's name after its fp32 file's stem: onnx-asr's (and our exporters') .int8, optimum's _int8.

@@ -16,9 +16,12 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.directory import MANIFEST_FILE as MANIFEST_FILE
+from speech_event.recognizers.onnx.families import register_family
 
 TOKENS_FILE = "tokens.txt"
 WHISPER = "whisper"
+# model_type in the config.json of Hugging Face's Whisper exports (optimum) and of onnx-asr's own
+WHISPER_MODEL_TYPES = ("whisper", "whisper-ort")
 
 
 @dataclass(frozen=True)
@@ -122,3 +125,12 @@ def text_of(tokens: Sequence[int], pieces: Sequence[bytes], timestamp_begin: int
     """Whisper's tokenizer.decode: timestamps left out, bytes joined, invalid UTF-8 replaced."""
     joined = b"".join(pieces[token] for token in tokens if token < timestamp_begin)
     return joined.decode("utf-8", errors="replace")
+
+
+def whisper_family_of(directory: Path, document: Dict[str, Any]) -> Optional[str]:
+    """whisper for a directory of Hugging Face's or onnx-asr's Whisper exports, which do not record
+    the family (their config.json's model_type says it); None for any other."""
+    return WHISPER if document.get("model_type") in WHISPER_MODEL_TYPES else None
+
+
+register_family(whisper_family_of)

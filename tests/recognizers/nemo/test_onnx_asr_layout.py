@@ -22,7 +22,7 @@ from speech_event.pipeline.resample import resample
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.manifest import CTC, RNNT, TDT, load_manifest
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.onnx.directory import family_of
+from speech_event.recognizers.onnx.families import family_of
 
 NEMO_DIRECTORY = (
     "a model directory holds encoder-model.onnx, decoder_joint-model.onnx (a transducer) or model.onnx "

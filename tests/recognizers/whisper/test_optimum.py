@@ -17,7 +17,8 @@ from fixtures.audio import speak_tones
 from fixtures.whisper_tones_model import MANIFEST, PIECES, SPECIALS, whisper_tones_model_directory
 from fixtures.whisper_tones_optimum import whisper_tones_optimum_directory
 from speech_event.errors import ModelError
-from speech_event.recognizers.onnx.directory import Runtime, family_of
+from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.forced import phrase_tokens, score_phrases
 from speech_event.recognizers.whisper.model import WhisperModel

@@ -1,0 +1,70 @@
+"""What the engine benchmarks share (bench/asr.py, bench/int8.py): the robot commands they speak,
+word errors against a reference, and this process's memory."""
+
+from pathlib import Path
+from typing import Tuple
+
+COMMANDS = [
+    "hello pepper",
+    "goodbye",
+    "thank you",
+    "yes",
+    "no",
+    "stop",
+    "follow me",
+    "come here",
+    "turn left",
+    "turn right",
+    "go forward",
+    "go back",
+    "go to the kitchen",
+    "go to the living room",
+    "go to the door",
+    "open the door",
+    "close the door",
+    "bring me the red cup",
+    "bring me the blue cup",
+    "put it on the table",
+    "pick up the ball",
+    "what time is it",
+    "what is your name",
+    "how are you",
+    "tell me a story",
+    "play some music",
+    "turn on the light",
+    "turn off the light",
+    "sit down",
+    "stand up",
+    "look at me",
+    "wave your hand",
+]
+
+
+def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
+    """(word edits, reference words): Levenshtein distance over words."""
+    ref, hyp = reference.split(), hypothesis.split()
+    previous = list(range(len(hyp) + 1))
+    for i, word in enumerate(ref, start=1):
+        current = [i]
+        for j, other in enumerate(hyp, start=1):
+            current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != other)))
+        previous = current
+    return previous[-1], len(ref)
+
+
+def peak_mib() -> float:
+    """This process's peak resident memory: VmHWM, which starts afresh at exec (ru_maxrss does not:
+    it would carry the parent's peak, the quantizer's among it)."""
+    return _status_mib("VmHWM")
+
+
+def resident_mib() -> float:
+    """This process's resident memory now (VmRSS)."""
+    return _status_mib("VmRSS")
+
+
+def _status_mib(field: str) -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(f"{field}:"):
+            return int(line.split()[1]) / 1024
+    raise RuntimeError(f"no {field} in /proc/self/status")

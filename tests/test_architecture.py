@@ -1,0 +1,152 @@
+"""The architecture, read from the code's import statements with ast (nothing is imported): the
+shared ONNX code knows no family, no modules import each other, and ROS stays in its rooms.
+
+Every import counts, at the top of a module or inside a function or ``if TYPE_CHECKING``: an
+import put inside a function to dodge a circle is still a circle."""
+
+import ast
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, Iterator, List, Set
+
+from tests.helpers.paths import ROOT
+
+PACKAGES = ("speech_event", "harness", "bench")
+SHARED_ONNX = "speech_event.recognizers.onnx"
+RECOGNIZERS = "speech_event.recognizers"
+# The ROS 1 client libraries and message packages, and where they may be imported: the adapters
+# (speech_event/adapters/ros*.py), the harness's ROS side (harness/ros/) and the benchmarks that
+# measure the node on a roscore (bench/ros*.py).
+ROS = (
+    "rospy",
+    "actionlib",
+    "actionlib_msgs",
+    "diagnostic_msgs",
+    "genpy",
+    "rosgraph",
+    "rosgraph_msgs",
+    "rospkg",
+    "std_msgs",
+)
+ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.ros")
+
+
+@dataclass(frozen=True)
+class Import:
+    """One name an import statement of ``module`` names: ``from a.b import c`` names ``a.b.c``."""
+
+    module: str
+    line: int
+    name: str
+
+    def within(self, package: str) -> bool:
+        return self.name == package or self.name.startswith(package + ".")
+
+
+def _modules() -> Dict[str, Path]:
+    """Every module of PACKAGES by dotted name (a package by its own name)."""
+    modules: Dict[str, Path] = {}
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            parts = path.relative_to(ROOT).with_suffix("").parts
+            modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return modules
+
+
+MODULES = _modules()
+
+
+def _imports(module: str, path: Path) -> Iterator[Import]:
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield Import(module, node.lineno, alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative: from the package, or level - 1 packages above it
+                above = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join(above + ([base] if base else []))
+            for alias in node.names:
+                yield Import(module, node.lineno, f"{base}.{alias.name}")
+
+
+IMPORTS = [found for module, path in MODULES.items() for found in _imports(module, path)]
+
+
+def _module_of(name: str) -> str:
+    """The module of ours that an imported name is or lies in; "" for none of ours."""
+    while name and name not in MODULES:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def _circles(graph: Dict[str, Set[str]]) -> List[List[str]]:
+    """The groups of modules that import each other, directly or around a circle (Tarjan's
+    strongly connected components of more than one module)."""
+    order: Dict[str, int] = {}
+    low: Dict[str, int] = {}
+    stack: List[str] = []
+    circles: List[List[str]] = []
+
+    def visit(module: str) -> None:
+        order[module] = low[module] = len(order)
+        stack.append(module)
+        for other in sorted(graph[module]):
+            if other not in order:
+                visit(other)
+                low[module] = min(low[module], low[other])
+            elif other in stack:
+                low[module] = min(low[module], order[other])
+        if low[module] == order[module]:
+            group = stack[stack.index(module) :]
+            del stack[stack.index(module) :]
+            if len(group) > 1:
+                circles.append(sorted(group))
+
+    for module in sorted(graph):
+        if module not in order:
+            visit(module)
+    return circles
+
+
+def test_the_modules_are_found_and_their_imports_read() -> None:
+    assert {"speech_event", "speech_event.node", "harness.ros.runner", "bench.asr"} <= set(MODULES)
+    read = {(found.module, found.name) for found in IMPORTS}
+    assert ("speech_event.node", "speech_event.config.SpeechEventConfig") in read
+    assert ("harness.driver_node", "harness.ros.driver_side.ros_side") in read  # inside a function
+
+
+def test_the_shared_onnx_code_imports_nothing_of_the_recognizers_but_itself() -> None:
+    """A new family registers itself (onnx/families.py); the shared code never names one."""
+    wrong = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found in IMPORTS
+        if found.module.startswith(SHARED_ONNX)
+        and found.within(RECOGNIZERS)
+        and not found.within(SHARED_ONNX)
+    ]
+    assert wrong == []
+
+
+def test_no_modules_import_each_other() -> None:
+    graph: Dict[str, Set[str]] = {module: set() for module in MODULES}
+    for found in IMPORTS:
+        target = _module_of(found.name)
+        if target and target != found.module:
+            graph[found.module].add(target)
+    assert _circles(graph) == []
+
+
+def test_a_circle_is_found_however_long() -> None:
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"d"}, "f": {"g"}, "g": {"f"}}
+    assert _circles(graph) == [["a", "b", "c"], ["f", "g"]]
+
+
+def test_ros_is_imported_only_in_its_rooms() -> None:
+    wrong = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found in IMPORTS
+        if any(found.within(library) for library in ROS) and not found.module.startswith(ROS_ROOMS)
+    ]
+    assert wrong == []
