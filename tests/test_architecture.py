@@ -43,11 +43,18 @@ class Import:
         return self.name == package or self.name.startswith(package + ".")
 
 
+# genpy's output, written into the checkout where the ROS interfaces are built for an editable install
+# (speech_event/adapters/ros_interfaces.py): not the project's code, as for ruff and mypy.
+GENERATED = ("speech_event/msg", "speech_event/srv")
+
+
 def _modules() -> Dict[str, Path]:
     """Every module of PACKAGES by dotted name (a package by its own name)."""
     modules: Dict[str, Path] = {}
     for package in PACKAGES:
         for path in sorted((ROOT / package).rglob("*.py")):
+            if path.relative_to(ROOT).as_posix().startswith(GENERATED):
+                continue
             parts = path.relative_to(ROOT).with_suffix("").parts
             modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
     return modules
