@@ -10,6 +10,8 @@ from typing import Any, Callable, Dict, Optional, Tuple
 import numpy as np
 
 from fixtures.audio import speak_tones
+from fixtures.festival import VOICES as FESTIVAL_VOICES
+from fixtures.festival import festival_voice
 from fixtures.tts import speak_tts
 from speech_event.config import PATH_KEYS, SpeechEventConfig
 from speech_event.errors import ModelError
@@ -40,9 +42,12 @@ class Voice:
         return None
 
 
+_ENGLISH = "[A-Za-z0-9',.?! -]"
 VOICES: Dict[str, Voice] = {
     "tones": Voice(speak_tones, "[a-z' ]"),
-    "tts": Voice(speak_tts, "[A-Za-z0-9',.?! -]"),
+    "tts": Voice(speak_tts, _ENGLISH),  # espeak-ng
+    # festival's voices, nearer a person's (fixtures/festival.py): what trained models are tried on
+    **{name: Voice(festival_voice(name), _ENGLISH) for name in FESTIVAL_VOICES},
 }
 
 
