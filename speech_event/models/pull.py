@@ -13,9 +13,10 @@ Needs huggingface_hub (the ``pull`` extra) and honours its settings: ``HF_ENDPOI
    or a faster-whisper (CTranslate2) model (``model.bin``, ``config.json`` and a vocabulary:
    ``vocabulary.json``, ``vocabulary.txt`` or ``tokenizer.json``; CTranslate2's vocabulary files
    alone tell it too). ``--int8`` takes the int8 files instead (``encoder-model.int8.onnx``,
-   ``encoder_model_int8.onnx``). A repository of another layout, or without a file the engine
-   needs, is named before anything large is downloaded; for faster-whisper, so is one whose
-   config.json is not CTranslate2's Whisper config, or that cannot be converted here (conversion.py).
+   ``encoder_model_int8.onnx``; a faster-whisper model's conversion is quantized). A repository
+   of another layout, or without a file the engine needs, is named before anything large is
+   downloaded; for faster-whisper, so is one whose config.json is not CTranslate2's Whisper
+   config, or that cannot be converted here (conversion.py).
 3. Only those files (with their ``*.onnx.data``, and config.json and tokenizer files when there) are
    downloaded, into huggingface_hub's cache: a rerun after a cut-off download downloads again only
    what it had not finished.
@@ -99,7 +100,7 @@ class Layout:
     optional: Tuple[str, ...]
     model_types: Tuple[str, ...]  # config.json's model_type of this layout
     one_of: Tuple[str, ...] = ()  # files of which it needs one: the first there is taken
-    signs: Tuple[str, ...] = ()  # files that tell the layout where its model files are missing
+    signs: Tuple[str, ...] = ()  # files that tell the layout without its model files, to name those
 
     def names(self, int8: bool) -> List[str]:
         """The files the engine needs (one_of apart), as said in messages."""
