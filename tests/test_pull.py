@@ -1,7 +1,11 @@
 """``speech-event pull`` against a Hugging Face Hub of the test's own on 127.0.0.1: the file API that
 huggingface_hub calls (model info with its files, the tree listing, and each file by HEAD and GET
 with its commit, ETag and ranges), serving models the tests build. Each pull runs as the command
-does, in a process of its own whose HF_ENDPOINT and HF_HOME point at the test's hub and folders."""
+does, in a process of its own whose HF_ENDPOINT and HF_HOME point at the test's hub and folders.
+
+A faster-whisper repository is the small CTranslate2 Whisper of fixtures/ct2_whisper_model.py:
+pulled, it is export-whisper's directory byte for byte, and the engine decodes with it what
+CTranslate2 (the ``ctranslate2`` package, test-only) decodes with the model.bin served."""
 
 import hashlib
 import json
@@ -9,22 +13,35 @@ import os
 import subprocess
 import sys
 import threading
+from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Optional, Tuple
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
 from urllib.parse import unquote, urlsplit
 
+import ctranslate2
 import numpy as np
 import onnx
 import pytest
 
+from fixtures import recordings
 from fixtures.audio import noise, speak_tones
+from fixtures.ct2_whisper_model import (
+    TEXT_POSITIONS,
+    model_bin_bytes,
+    tokenizer_json,
+    write_whisper_directory,
+)
 from fixtures.transducer_model import build_random_transducer
 from fixtures.whisper_tones_optimum import optimum_json_files, whisper_tones_optimum_directory
+from speech_event.exporters import whisper as whisper_exporter
+from speech_event.models.conversion import NO_KINYARWANDA, ONNX_MISSING
 from speech_event.models.pull import KNOWN, main
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.whisper.features import whisper_log_mel
+from speech_event.recognizers.whisper.manifest import load_whisper_manifest
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
 TDT_NAME = "nemo-parakeet-tdt-0.6b-v2"
@@ -200,14 +217,18 @@ def tdt_files(tmp_path_factory: pytest.TempPathFactory) -> Dict[str, bytes]:
     return onnx_asr_tdt_repository(tmp_path_factory.mktemp("tdt"))
 
 
-def pull(hub: FakeHub, home: Path, *arguments: str) -> "subprocess.CompletedProcess[str]":
+def pull(
+    hub: FakeHub, home: Path, *arguments: str, without: Sequence[str] = ()
+) -> "subprocess.CompletedProcess[str]":
     """``speech-event pull ARGUMENTS`` in a process of its own, on ``hub``, with its Hugging Face
-    folders in ``home``; no proxy, no token, nothing else of the Hub's settings from outside."""
+    folders in ``home``; no proxy, no token, nothing else of the Hub's settings from outside.
+    The packages ``without`` names cannot be imported in it, as when they are not installed."""
     return subprocess.run(
         [
             sys.executable,
             "-c",
-            "import sys; from speech_event.application import main; sys.exit(main())",
+            f"import sys; sys.modules.update(dict.fromkeys({list(without)!r})); "
+            "from speech_event.application import main; sys.exit(main())",
             "pull",
             *arguments,
         ],
@@ -334,12 +355,183 @@ def test_a_whisper_repository_without_what_the_engine_reads_is_refused_and_left_
     assert not directory.exists() and not (tmp_path / ".whisper.partial").exists()
 
 
+@dataclass(frozen=True)
+class FasterWhisper:
+    """A faster-whisper repository's files, the directory they were written from, and what
+    export-whisper makes of that directory (fp32 and int8 files together)."""
+
+    files: Dict[str, bytes]
+    source: Path
+    exported: Path
+
+
+@pytest.fixture(scope="module")
+def faster_whisper(tmp_path_factory: pytest.TempPathFactory) -> FasterWhisper:
+    """The small CTranslate2 Whisper as Systran publishes tiny.en: model.bin in float16,
+    config.json, CTranslate2's vocabulary.txt and Hugging Face's tokenizer.json, a card."""
+    built = tmp_path_factory.mktemp("faster-whisper")
+    source = write_whisper_directory(built / "source", "float16", "vocabulary.txt")
+    files = {name: (source / name).read_bytes() for name in ("model.bin", "config.json", "vocabulary.txt")}
+    files.update(
+        {
+            "tokenizer.json": json.dumps(tokenizer_json()).encode(),
+            "README.md": b"# faster-whisper tiny.en\n",
+            ".gitattributes": b"*.bin filter=lfs\n",
+        }
+    )
+    exported = built / "exported"
+    assert whisper_exporter.main([str(source), str(exported), "--int8"]) == 0
+    return FasterWhisper(files, source, exported)
+
+
+def _ctranslate2_tokens(model: FasterWhisper, audio: np.ndarray) -> List[int]:
+    """CTranslate2's greedy decoding of ``audio`` with the faster-whisper directory, at the engine's
+    precision and under Whisper's rules (no timestamps, config.json's suppressed tokens, blank
+    suppressed at the start), given the engine's log-mel."""
+    manifest = load_whisper_manifest(model.exported / "config.json")
+    reference = ctranslate2.models.Whisper(str(model.source), compute_type="float32", intra_threads=1)
+    result = reference.generate(
+        ctranslate2.StorageView.from_array(whisper_log_mel(audio, manifest.mel_bands)[None]),
+        [manifest.prompt("english")],
+        beam_size=1,
+        suppress_blank=True,
+        suppress_tokens=[-1],
+        max_length=TEXT_POSITIONS,
+    )
+    return list(result[0].sequences_ids[0])
+
+
+def test_a_faster_whisper_repository_is_converted_into_the_engines_directory(
+    hub: FakeHub, tmp_path: Path, faster_whisper: FasterWhisper
+) -> None:
+    hub.repositories["Systran/faster-whisper-tiny.en"] = faster_whisper.files
+    directory = tmp_path / "models" / "en"
+    done = pull(hub, tmp_path, "faster-whisper-tiny.en", str(directory))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == f"model whisper\nen_model_path {directory}\n"
+    assert done.stderr.splitlines()[-2:] == [
+        "Systran/faster-whisper-tiny.en: converting to the Whisper engine's ONNX files",
+        f"{directory}: a whisper model; its configuration lines:",
+    ]
+    # export-whisper's directory, and nothing of CTranslate2's: model.bin stays in the cache
+    written = ["config.json", "decoder.onnx", "encoder.onnx", "tokens.txt"]
+    assert _listing(directory) == {name: (faster_whisper.exported / name).read_bytes() for name in written}
+    assert [hub.downloads(name) for name in faster_whisper.files] == [1, 1, 1, 0, 0, 0]
+    assert [path.name for path in (tmp_path / "models").iterdir()] == ["en"]
+    audio = recordings.cards()[0].samples()
+    tokens = WhisperRecognizer(directory, "english").decode(audio).tokens
+    assert tokens == _ctranslate2_tokens(faster_whisper, audio)
+    assert len(tokens) == 12  # sample_len: the random model never ends its text
+
+
+def test_int8_keeps_only_the_int8_graphs_of_a_faster_whisper_conversion(
+    hub: FakeHub, tmp_path: Path, faster_whisper: FasterWhisper
+) -> None:
+    hub.repositories["someone/faster-whisper-base"] = faster_whisper.files
+    directory = tmp_path / "en"
+    done = pull(hub, tmp_path, "someone/faster-whisper-base", str(directory), "--int8")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == f"model whisper\nen_model_path {directory}\n"
+    assert (
+        "someone/faster-whisper-base: converting to the Whisper engine's ONNX files and quantizing them to int8"
+        in done.stderr.splitlines()
+    )
+    written = ["config.json", "decoder.int8.onnx", "encoder.int8.onnx", "tokens.txt"]
+    assert _listing(directory) == {name: (faster_whisper.exported / name).read_bytes() for name in written}
+    # only int8 graphs: the engine runs them whatever quantization says
+    audio = recordings.cards()[0].samples()
+    assert WhisperRecognizer(directory, "english").decode(audio).tokens == (
+        WhisperRecognizer(faster_whisper.exported, "english", Runtime(int8=True)).decode(audio).tokens
+    )
+
+
+FASTER_WHISPER_NEEDS = (
+    "the engine needs model.bin, config.json and one of vocabulary.json, vocabulary.txt or tokenizer.json"
+)
+
+
+@pytest.mark.parametrize(
+    ("removed", "changed", "arguments", "without", "message"),
+    [
+        (
+            ["model.bin"],
+            {},
+            [],
+            [],
+            f"someone/faster-whisper is a faster-whisper (CTranslate2) Whisper model but has no model.bin: "
+            f"{FASTER_WHISPER_NEEDS}",
+        ),
+        (
+            ["vocabulary.txt", "tokenizer.json"],
+            {},
+            [],
+            [],
+            "someone/faster-whisper is a faster-whisper (CTranslate2) Whisper model but has none of "
+            f"vocabulary.json, vocabulary.txt or tokenizer.json: {FASTER_WHISPER_NEEDS}",
+        ),
+        (
+            [],
+            # a CTranslate2 model of another kind: a translator's config
+            {"config.json": json.dumps({"add_source_bos": False, "unk_token": "<unk>"}).encode()},
+            [],
+            [],
+            "someone/faster-whisper: {snapshot}/config.json: no list of token ids 'suppress_ids'; "
+            "CTranslate2's Whisper config has suppress_ids and suppress_ids_begin, which Whisper's decoding "
+            "rules need",
+        ),
+        ([], {}, ["--language", "kinyarwanda"], [], f"someone/faster-whisper: {NO_KINYARWANDA}"),
+        ([], {}, [], ["onnx"], f"someone/faster-whisper: {ONNX_MISSING}"),
+    ],
+    ids=["no-model-bin", "no-vocabulary", "not-whisper", "kinyarwanda", "no-onnx"],
+)
+def test_a_faster_whisper_repository_that_cannot_be_converted_is_refused_before_model_bin_is_fetched(
+    hub: FakeHub,
+    tmp_path: Path,
+    faster_whisper: FasterWhisper,
+    removed: List[str],
+    changed: Dict[str, bytes],
+    arguments: List[str],
+    without: List[str],
+    message: str,
+) -> None:
+    files = {name: data for name, data in faster_whisper.files.items() if name not in removed}
+    hub.repositories["someone/faster-whisper"] = {**files, **changed}
+    done = pull(hub, tmp_path, "someone/faster-whisper", str(tmp_path / "model"), *arguments, without=without)
+    snapshot = tmp_path / "hf" / "hub" / "models--someone--faster-whisper" / "snapshots"
+    expected = message.format(snapshot=snapshot / hub.commit("someone/faster-whisper"))
+    assert (done.returncode, done.stdout, done.stderr) == (2, "", f"error: {expected}\n")
+    assert hub.downloads("model.bin") == 0
+    assert list(tmp_path.iterdir()) == [tmp_path / "hf"]
+
+
+def test_a_model_bin_that_is_not_whisper_is_named_and_leaves_no_directory(
+    hub: FakeHub, tmp_path: Path, faster_whisper: FasterWhisper
+) -> None:
+    # another CTranslate2 model's model.bin beside a Whisper config.json: only its header tells
+    hub.repositories["someone/faster-whisper"] = {
+        **faster_whisper.files,
+        "model.bin": model_bin_bytes([], spec="TransformerSpec", revision=7),
+    }
+    done = pull(hub, tmp_path, "someone/faster-whisper", str(tmp_path / "model"))
+    snapshot = tmp_path / "hf" / "hub" / "models--someone--faster-whisper" / "snapshots"
+    assert (done.returncode, done.stdout) == (2, "")
+    assert done.stderr.endswith(
+        "error: someone/faster-whisper: the files downloaded are not a model the engine loads: "
+        f"{snapshot / hub.commit('someone/faster-whisper')}/model.bin: a CTranslate2 TransformerSpec model, "
+        "not Whisper (WhisperSpec)\n"
+    )
+    assert list(tmp_path.iterdir()) == [tmp_path / "hf"]
+
+
 def test_an_unknown_name_lists_the_known_ones(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["parakeet-large", str(tmp_path / "model")]) == 2
     assert capsys.readouterr().err == (
         "error: unknown model 'parakeet-large': give OWNER/REPO (a model repository on the Hugging Face Hub) "
-        "or one of nemo-parakeet-ctc-0.6b, nemo-parakeet-rnnt-0.6b, nemo-parakeet-tdt-0.6b-v2, "
-        "nemo-parakeet-tdt-0.6b-v3, whisper-base, whisper-large-v3-turbo, whisper-small, whisper-tiny\n"
+        "or one of faster-whisper-base, faster-whisper-base.en, faster-whisper-large-v1, faster-whisper-large-v2, "
+        "faster-whisper-large-v3, faster-whisper-medium, faster-whisper-medium.en, faster-whisper-small, "
+        "faster-whisper-small.en, faster-whisper-tiny, faster-whisper-tiny.en, nemo-parakeet-ctc-0.6b, "
+        "nemo-parakeet-rnnt-0.6b, nemo-parakeet-tdt-0.6b-v2, nemo-parakeet-tdt-0.6b-v3, whisper-base, "
+        "whisper-large-v3-turbo, whisper-small, whisper-tiny\n"
     )
     assert not (tmp_path / "model").exists()
 
@@ -375,8 +567,9 @@ def test_an_existing_directory_is_never_written_over(
             {"encoder.onnx": b"", "decoder.onnx": b"", "joiner.onnx": b"", "tokens.txt": b""},
             "someone/other holds no model directory speech-event runs: it has decoder.onnx, encoder.onnx, joiner.onnx, "
             "tokens.txt; it needs encoder-model.onnx and decoder_joint-model.onnx for a NeMo transducer (RNN-T "
-            "or TDT), model.onnx for a NeMo CTC model, or encoder_model.onnx and decoder_model_merged.onnx for a "
-            "Whisper model (Hugging Face optimum's export)",
+            "or TDT), model.onnx for a NeMo CTC model, encoder_model.onnx and decoder_model_merged.onnx for a "
+            "Whisper model (Hugging Face optimum's export), or model.bin for a faster-whisper (CTranslate2) "
+            "Whisper model",
         ),
         (
             {"whisper-base_beamsearch.onnx": b"", "config.json": b'{"model_type": "whisper-ort"}'},

@@ -279,9 +279,7 @@ def export_faster_whisper(directory: Path, out_dir: Path, named: Dict[str, str])
     """Write the engine's directory for the faster-whisper model in ``directory`` to ``out_dir``."""
     model = read_faster_whisper(directory, named)
     try:
-        import onnx
-
-        from speech_event.exporters.whisper_graphs import decoder_graph, encoder_graph
+        from speech_event.exporters.whisper_graphs import decoder_graph, encoder_graph, save_graph
     except ImportError:
         # not a dependency of the node: the robot runs the files, it does not write them
         raise ModelError(
@@ -289,7 +287,7 @@ def export_faster_whisper(directory: Path, out_dir: Path, named: Dict[str, str])
             "faster-whisper directory needs neither torch nor openai-whisper)"
         ) from None
     out_dir.mkdir(parents=True, exist_ok=True)
-    onnx.save(encoder_graph(model.weights), str(out_dir / ENCODER_FILE))
-    onnx.save(decoder_graph(model.weights), str(out_dir / DECODER_FILE))
+    save_graph(encoder_graph(model.weights), out_dir / ENCODER_FILE)
+    save_graph(decoder_graph(model.weights), out_dir / DECODER_FILE)
     write_text_files(out_dir, model.pieces, model.manifest)
     return model.manifest

@@ -18,8 +18,12 @@ The token embedding is one initializer, stored transposed [width, vocabulary]: t
 reads it as a weight (so the int8 version quantizes it), and the embedding of the tokens gathers
 its columns. ``share_transposed_embedding`` does the same to a decoder that holds the embedding
 twice (torch.onnx folds the transpose the logits read into a second copy).
+
+An ONNX file is one protobuf message, which cannot pass 2 GiB: ``save_graph`` writes the weights of
+a larger graph (Whisper large's fp32 encoder and decoder, about 3.0 and 3.2 GB) to a file beside it.
 """
 
+from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -33,6 +37,10 @@ OPSET = 17
 # Every onnxruntime since 1.13 loads IR version 8 with opset 17; onnx.helper would write its own, newer one.
 IR_VERSION = 8
 TIED_EMBEDDING = "decoder.token_embedding.transposed"
+# A graph whose weights pass this many bytes is saved with them in a file of their own: protobuf's
+# 2 GiB limit on one message, less room for the nodes (under a megabyte for Whisper large)
+LARGEST_INLINE_WEIGHTS = 2**31 - 2**26
+EXTERNAL_DATA_SUFFIX = ".data"
 
 
 Shape = Sequence[Union[int, str]]
@@ -329,3 +337,19 @@ def share_transposed_embedding(model: onnx.ModelProto) -> int:
         graph.initializer.extend(kept)
         return int(transposed.nbytes)
     return 0
+
+
+def save_graph(model: onnx.ModelProto, path: Path) -> None:
+    """``model`` to ``path``: its weights inside it, or when they pass LARGEST_INLINE_WEIGHTS in
+    ``path``.data beside it (onnxruntime reads them from there, given the file's path)."""
+    weights = sum(len(tensor.raw_data) for tensor in model.graph.initializer)
+    if weights <= LARGEST_INLINE_WEIGHTS:
+        onnx.save(model, str(path))
+        return
+    onnx.save(
+        model,
+        str(path),
+        save_as_external_data=True,
+        all_tensors_to_one_file=True,
+        location=path.name + EXTERNAL_DATA_SUFFIX,
+    )

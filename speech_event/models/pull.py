@@ -4,21 +4,26 @@ Face Hub, checked and ready for the node, with the configuration lines that use 
 Needs huggingface_hub (the ``pull`` extra) and honours its settings: ``HF_ENDPOINT`` (a mirror),
 ``HF_HOME`` or ``HF_HUB_CACHE`` (where downloads are kept), ``HF_TOKEN``, its progress bars.
 
-1. NAME is one of KNOWN (the Parakeet exports as onnx-asr names them, the Whisper sizes) or any
-   OWNER/REPO.
+1. NAME is one of KNOWN (the Parakeet exports as onnx-asr names them, the Whisper sizes, Systran's
+   faster-whisper models) or any OWNER/REPO.
 2. The repository's file list (and its config.json's ``model_type``) says its layout: a NeMo
    transducer (``encoder-model.onnx``, ``decoder_joint-model.onnx``), a NeMo CTC model
-   (``model.onnx``), both with ``vocab.txt``, or a Whisper model as Hugging Face optimum exports it
-   (``encoder_model.onnx``, ``decoder_model_merged.onnx``, ``vocab.json``, ``added_tokens.json``);
-   ``--int8`` takes the int8 files instead (``encoder-model.int8.onnx``, ``encoder_model_int8.onnx``).
-   A repository of another layout, or without a file the engine needs, is named before anything
-   large is downloaded.
+   (``model.onnx``), both with ``vocab.txt``, a Whisper model as Hugging Face optimum exports it
+   (``encoder_model.onnx``, ``decoder_model_merged.onnx``, ``vocab.json``, ``added_tokens.json``),
+   or a faster-whisper (CTranslate2) model (``model.bin``, ``config.json`` and a vocabulary:
+   ``vocabulary.json``, ``vocabulary.txt`` or ``tokenizer.json``; CTranslate2's vocabulary files
+   alone tell it too). ``--int8`` takes the int8 files instead (``encoder-model.int8.onnx``,
+   ``encoder_model_int8.onnx``; a faster-whisper model's conversion is quantized). A repository
+   of another layout, or without a file the engine needs, is named before anything large is
+   downloaded; for faster-whisper, so is one whose config.json is not CTranslate2's Whisper
+   config, or that cannot be converted here (conversion.py).
 3. Only those files (with their ``*.onnx.data``, and config.json and tokenizer files when there) are
    downloaded, into huggingface_hub's cache: a rerun after a cut-off download downloads again only
    what it had not finished.
-4. They are linked (copied across file systems) into a temporary sibling of DIR, checked there
-   (every file, the family, for NeMo the manifest the engine reads), and the sibling is renamed to
-   DIR: DIR never exists half-written, and an existing DIR is never touched.
+4. They are linked (copied across file systems) into a temporary sibling of DIR, or for
+   faster-whisper converted into it (conversion.py), checked there (every file, the family, for
+   NeMo the manifest the engine reads), and the sibling is renamed to DIR: DIR never exists
+   half-written, and an existing DIR is never touched.
 5. stdout gets the configuration lines that use it, ``model FAMILY`` and ``en_model_path DIR``
    (``rw_model_path`` with ``--language kinyarwanda``), so ``> models.ini`` is a configuration file.
 
@@ -36,6 +41,8 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from speech_event.errors import ModelError
+from speech_event.exporters.faster_whisper import CONFIG_FILE, MODEL_FILE, VOCABULARY_FILES
+from speech_event.models.conversion import check_convertible, convert
 from speech_event.recognizers.nemo.manifest import CTC, RNNT, TDT, load_manifest
 from speech_event.recognizers.nemo.vocabulary import load_vocabulary
 from speech_event.recognizers.onnx.directory import MANIFEST_FILE
@@ -43,9 +50,24 @@ from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.whisper.manifest import WHISPER
 from speech_event.recognizers.whisper.optimum_layout import load_optimum_manifest, load_optimum_pieces
 
-# Known names -> Hugging Face repositories: onnx-asr's names of the NeMo exports, and the Whisper
-# sizes onnx-asr loads from onnx-community (optimum's layout; onnx-asr's own "whisper-base" is
-# istupakov/whisper-base-onnx, an onnxruntime beam-search export the Whisper engine does not read).
+# faster-whisper's own model names, as Systran publishes them (CTranslate2's layout, converted)
+FASTER_WHISPER_SIZES = (
+    "tiny.en",
+    "tiny",
+    "base.en",
+    "base",
+    "small.en",
+    "small",
+    "medium.en",
+    "medium",
+    "large-v1",
+    "large-v2",
+    "large-v3",
+)
+# Known names -> Hugging Face repositories: onnx-asr's names of the NeMo exports, the Whisper sizes
+# onnx-asr loads from onnx-community (optimum's layout; onnx-asr's own "whisper-base" is
+# istupakov/whisper-base-onnx, an onnxruntime beam-search export the Whisper engine does not read),
+# and Systran's faster-whisper repositories.
 KNOWN: Dict[str, str] = {
     "nemo-parakeet-tdt-0.6b-v2": "istupakov/parakeet-tdt-0.6b-v2-onnx",
     "nemo-parakeet-tdt-0.6b-v3": "istupakov/parakeet-tdt-0.6b-v3-onnx",
@@ -55,6 +77,7 @@ KNOWN: Dict[str, str] = {
     "whisper-base": "onnx-community/whisper-base",
     "whisper-small": "onnx-community/whisper-small",
     "whisper-large-v3-turbo": "onnx-community/whisper-large-v3-turbo",
+    **{f"faster-whisper-{size}": f"Systran/faster-whisper-{size}" for size in FASTER_WHISPER_SIZES},
 }
 INSTALL = "speech-event pull needs huggingface_hub: pip install 'speech-event[pull]'"
 DOWNLOAD_FAILED, UNUSABLE = 1, 2
@@ -65,9 +88,10 @@ SHOWN_FILES = 12
 
 @dataclass(frozen=True)
 class Layout:
-    """A model directory layout an engine reads: its ONNX files (fp32 and int8, as published) and
-    the other files it needs or takes when there. A name starting ``**/`` may be in any folder of
-    the repository (optimum puts its ONNX files in ``onnx/``); the others are at its root."""
+    """A model directory layout an engine reads, or that is converted into one: its model files
+    (fp32 and int8, as published) and the other files it needs or takes when there. A name
+    starting ``**/`` may be in any folder of the repository (optimum puts its ONNX files in
+    ``onnx/``); the others are at its root."""
 
     description: str
     models: Tuple[str, ...]
@@ -75,10 +99,16 @@ class Layout:
     needed: Tuple[str, ...]
     optional: Tuple[str, ...]
     model_types: Tuple[str, ...]  # config.json's model_type of this layout
+    one_of: Tuple[str, ...] = ()  # files of which it needs one: the first there is taken
+    signs: Tuple[str, ...] = ()  # files that tell the layout without its model files, to name those
 
     def names(self, int8: bool) -> List[str]:
-        """The files the engine needs, as said in messages."""
+        """The files the engine needs (one_of apart), as said in messages."""
         return [_shown(name) for name in (self.int8_models if int8 else self.models) + self.needed]
+
+    def needs(self, int8: bool) -> str:
+        """Every file the engine needs, as said in messages."""
+        return _joined(self.names(int8) + ([f"one of {_either(self.one_of)}"] if self.one_of else []))
 
 
 NEMO_TRANSDUCER = Layout(
@@ -109,7 +139,19 @@ WHISPER_OPTIMUM = Layout(
     ),
     ("whisper",),
 )
-LAYOUTS = (NEMO_TRANSDUCER, NEMO_CTC, WHISPER_OPTIMUM)
+# CTranslate2's Whisper, converted after download; int8 is a quantization of the conversion, so the
+# same files either way. Its config.json has no model_type: its files tell it.
+FASTER_WHISPER = Layout(
+    "a faster-whisper (CTranslate2) Whisper model",
+    (MODEL_FILE,),
+    (MODEL_FILE,),
+    (CONFIG_FILE,),
+    (),
+    (),
+    one_of=VOCABULARY_FILES,
+    signs=tuple(name for name in VOCABULARY_FILES if name.startswith("vocabulary.")),
+)
+LAYOUTS = (NEMO_TRANSDUCER, NEMO_CTC, WHISPER_OPTIMUM, FASTER_WHISPER)
 
 
 class PullError(Exception):
@@ -125,8 +167,12 @@ def _shown(pattern: str) -> str:
     return pattern.replace("**/", "").replace("?int8", "_int8")
 
 
-def _joined(words: Sequence[str]) -> str:
-    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+def _joined(words: Sequence[str], last: str = "and") -> str:
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} {last} {words[-1]}"
+
+
+def _either(words: Sequence[str]) -> str:
+    return _joined(words, "or")
 
 
 def repository_of(name: str) -> str:
@@ -167,7 +213,7 @@ def layout_of(repository: str, files: Sequence[str], model_type: Optional[str]) 
             f"run; it runs {_joined(runs)}"
         )
     for layout in LAYOUTS:
-        if any(find(files, pattern) for pattern in layout.models + layout.int8_models):
+        if any(find(files, pattern) for pattern in layout.models + layout.int8_models + layout.signs):
             return layout
     expected = [
         f"{_joined([_shown(name) for name in layout.models])} for {layout.description}" for layout in LAYOUTS
@@ -186,9 +232,13 @@ def needed_files(repository: str, files: Sequence[str], layout: Layout, int8: bo
     external data, the needed files, the optional ones that are there. PullError names the missing."""
     models = layout.int8_models if int8 else layout.models
     missing = [_shown(name) for name in models + layout.needed if find(files, name) is None]
-    if missing:
+    one = next((path for path in (find(files, name) for name in layout.one_of) if path), None)
+    lacks = ([f"no {_joined(missing)}"] if missing else []) + (
+        [f"none of {_either(layout.one_of)}"] if layout.one_of and one is None else []
+    )
+    if lacks:
         other = layout.models if int8 else layout.int8_models
-        if all(find(files, name) for name in other + layout.needed):
+        if missing and other != models and all(find(files, name) for name in other + layout.needed):
             hint = (
                 " (it has the fp32 files: pull without --int8)"
                 if int8
@@ -197,10 +247,11 @@ def needed_files(repository: str, files: Sequence[str], layout: Layout, int8: bo
         else:
             hint = ""
         raise PullError(
-            f"{repository} is {layout.description} but has no {_joined(missing)}{hint}: the engine needs "
-            f"{_joined(layout.names(int8))}"
+            f"{repository} is {layout.description} but has {' and '.join(lacks)}{hint}: the engine needs "
+            f"{layout.needs(int8)}"
         )
     chosen = [path for path in (find(files, name) for name in models + layout.needed) if path]
+    chosen += [one] if one else []
     data = [
         path
         for path in files
@@ -237,7 +288,7 @@ def _download_error(hub: Any, repository: str, problem: Exception) -> PullError:
     )
 
 
-def _fetch(hub: Any, repository: str, int8: bool) -> Tuple[Layout, Path, List[str]]:
+def _fetch(hub: Any, repository: str, int8: bool, language: str) -> Tuple[Layout, Path, List[str]]:
     """The layout, the snapshot folder in huggingface_hub's cache, and the files downloaded into it."""
     try:
         info = hub.HfApi().model_info(repository)
@@ -252,6 +303,11 @@ def _fetch(hub: Any, repository: str, int8: bool) -> Tuple[Layout, Path, List[st
         raise _download_error(hub, repository, problem) from None
     layout = layout_of(repository, files, None if config is None else _model_type(repository, Path(config)))
     wanted = needed_files(repository, files, layout, int8)
+    if layout is FASTER_WHISPER and config is not None:  # needed_files made sure it is there
+        try:
+            check_convertible(Path(config), language)
+        except ModelError as problem:
+            raise PullError(f"{repository}: {problem}") from None
     print(f"{repository}: {layout.description}; downloading {_joined(wanted)}", file=sys.stderr)
     try:
         snapshot = hub.snapshot_download(repository, revision=revision, allow_patterns=wanted)
@@ -296,8 +352,9 @@ def _family(directory: Path, layout: Layout, int8: bool) -> str:
     return load_manifest(directory / MANIFEST_FILE).family
 
 
-def pull(name: str, directory: Path, int8: bool) -> Tuple[str, Path]:
-    """Fetch ``name`` into ``directory``; its family and absolute path. PullError says what went wrong."""
+def pull(name: str, directory: Path, int8: bool, language: str) -> Tuple[str, Path]:
+    """Fetch ``name`` into ``directory`` for ``language``; its family and absolute path. PullError says
+    what went wrong."""
     repository = repository_of(name)
     directory = directory.absolute()
     if directory.exists() and (not directory.is_dir() or any(directory.iterdir())):
@@ -306,13 +363,21 @@ def pull(name: str, directory: Path, int8: bool) -> Tuple[str, Path]:
             "(remove it, or give another)"
         )
     hub = _hub()
-    layout, snapshot, files = _fetch(hub, repository, int8)
+    layout, snapshot, files = _fetch(hub, repository, int8, language)
     partial = directory.parent / f".{directory.name}.partial"
-    shutil.rmtree(partial, ignore_errors=True)  # what a pull cut off while placing left
+    shutil.rmtree(partial, ignore_errors=True)  # what a pull cut off while placing or converting left
     directory.parent.mkdir(parents=True, exist_ok=True)
     try:
-        _placed(snapshot, files, partial)
-        family = _family(partial, layout, int8)
+        if layout is FASTER_WHISPER:
+            print(
+                f"{repository}: converting to the Whisper engine's ONNX files"
+                + (" and quantizing them to int8" if int8 else ""),
+                file=sys.stderr,
+            )
+            family = convert(snapshot, partial, int8)
+        else:
+            _placed(snapshot, files, partial)
+            family = _family(partial, layout, int8)
         if directory.exists():
             directory.rmdir()  # empty, as checked above
         os.rename(partial, directory)
@@ -350,7 +415,7 @@ def main(argv: List[str]) -> int:
     )
     arguments = parser.parse_args(argv)
     try:
-        family, directory = pull(arguments.name, arguments.directory, arguments.int8)
+        family, directory = pull(arguments.name, arguments.directory, arguments.int8, arguments.language)
     except PullError as problem:
         print(f"error: {problem}", file=sys.stderr)
         return problem.status
