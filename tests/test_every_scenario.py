@@ -1,60 +1,20 @@
-"""Every scenario file, in memory: it passes (what it expects is published), and with speculation
-and partial results on (the defaults) and with each of them off, at two recognition times (0 s, and
-1 s: recognition overlaps the speech that follows), neither changes what the robot acts on.
+"""Every hermetic scenario file passes in memory, and publishes the same with speculation and partial
+results off (tests/helpers/every_scenario.py says exactly what is compared)."""
 
-- Speculation: the same texts, errors at the same times, transcripts in the same order, each no
-  later (so one may now come before an error it used to follow); the same action results and
-  service responses.
-- Partial results: the same published texts at the same times, results and responses.
-
-The run with the defaults is shared by the three: at 0 s it is the scenario's own run."""
-
-import dataclasses
 from pathlib import Path
-from typing import Any, List, Tuple
 
 import pytest
 
-from harness.memory_runner import run_in_memory
-from harness.outcome import Outcome, Published
-from harness.report import passed, report
-from harness.scenario import Scenario, load_scenario
-from speech_event import SOUND_DETECTION_DOWN
-from speech_event.config import SpeechEventConfig
+from tests.helpers.every_scenario import (
+    RECOGNITION_SECONDS,
+    check_scenario_with_and_without_speculation_and_partials,
+)
 from tests.helpers.scenario_files import SCENARIOS
 
 
-def _errors(outcome: Outcome) -> List[Tuple[float, str]]:
-    return [(p.time, p.text) for p in outcome.published if p.text == SOUND_DETECTION_DOWN]
-
-
-def _transcripts(outcome: Outcome) -> List[Published]:
-    return [p for p in outcome.published if p.text != SOUND_DETECTION_DOWN]
-
-
-def _without(scenario: Scenario, **settings: Any) -> Scenario:
-    return dataclasses.replace(scenario, config=dataclasses.replace(scenario.config, **settings))
-
-
-@pytest.mark.parametrize("recognition_seconds", [0.0, 1.0])
+@pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)
 @pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
 def test_every_scenario_passes_and_publishes_the_same_without_speculation_and_without_partials(
     path: Path, recognition_seconds: float
 ) -> None:
-    scenario = load_scenario(str(path), SpeechEventConfig())
-    assert scenario.config.speculative_recognition and scenario.config.partial_period == 0.5  # defaults
-    default = run_in_memory(scenario, recognition_seconds)
-    if recognition_seconds == 0.0:  # the time the scenarios' expectations are written for
-        assert passed(scenario, default), report(scenario, default)
-
-    plain = run_in_memory(_without(scenario, speculative_recognition=False), recognition_seconds)
-    assert _errors(default) == _errors(plain)
-    assert [m.text for m in _transcripts(default)] == [m.text for m in _transcripts(plain)]
-    assert all(a.time <= b.time + 1e-9 for a, b in zip(_transcripts(default), _transcripts(plain)))
-    assert [r.text for r in default.results] == [r.text for r in plain.results]
-    assert default.responses == plain.responses
-
-    no_partials = run_in_memory(_without(scenario, partial_period=0.0), recognition_seconds)
-    assert default.published == no_partials.published
-    assert default.results == no_partials.results
-    assert default.responses == no_partials.responses
+    check_scenario_with_and_without_speculation_and_partials(path, recognition_seconds)

@@ -1,14 +1,25 @@
-"""The scenario files, and those written for the fake engine in the tones voice (the others name
-the engine they need): every engine that transcribes the tones voice passes those."""
+"""The scenario files: those on trained weights (tox env ``real``), the others (hermetic: fake,
+tones models, pocketsphinx), and among those the ones written for the fake engine in the tones
+voice (the others name the engine they need): every engine that transcribes the tones voice passes
+those."""
 
 from pathlib import Path
 from typing import List
 
+from harness.catalog import TRAINED_MODELS
 from harness.scenario import load_scenario
 from speech_event.config import SpeechEventConfig
 from tests.helpers.paths import ROOT
 
-SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+ALL_SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+
+
+def _on_trained_weights(path: Path) -> bool:
+    return load_scenario(path, SpeechEventConfig()).recognizer in TRAINED_MODELS
+
+
+TRAINED_SCENARIOS = [path for path in ALL_SCENARIOS if _on_trained_weights(path)]
+SCENARIOS = [path for path in ALL_SCENARIOS if not _on_trained_weights(path)]
 
 
 def _for_the_fake_in_tones(path: Path) -> bool:

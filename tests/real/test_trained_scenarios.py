@@ -1,0 +1,25 @@
+"""The scenarios on trained weights (Whisper tiny.en: free speech, speculation, partial results,
+set_grammar) pass in memory, and publish the same with speculation and partial results off
+(tests/helpers/every_scenario.py says exactly what is compared)."""
+
+from pathlib import Path
+
+import pytest
+
+from tests.helpers.every_scenario import (
+    RECOGNITION_SECONDS,
+    check_scenario_with_and_without_speculation_and_partials,
+)
+from tests.helpers.scenario_files import TRAINED_SCENARIOS
+
+
+def test_there_are_scenarios_on_trained_weights_for_free_speech_and_set_grammar() -> None:
+    assert [path.stem for path in TRAINED_SCENARIOS] == ["trained_free_speech", "trained_yes_no"]
+
+
+@pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)
+@pytest.mark.parametrize("path", TRAINED_SCENARIOS, ids=lambda path: path.stem)
+def test_every_trained_scenario_passes_and_publishes_the_same_without_speculation_and_without_partials(
+    path: Path, recognition_seconds: float
+) -> None:
+    check_scenario_with_and_without_speculation_and_partials(path, recognition_seconds)
