@@ -96,8 +96,9 @@ class EngineProcess:
         self._calls: Dict[str, Tuple[Any, ...]] = {}  # the last call of each replayed method
         self._lock = threading.Lock()
         self._child: Optional[_Child] = None
-        self._finalizer: Optional[weakref.finalize[[], None]] = None
+        self._finalizer: Optional[weakref.finalize[[], EngineProcess]] = None
         self._closed = False
+        self.engine_class = ""  # the class name of the engine built (the child's answer to the start)
         with self._lock:
             self._start()
 
@@ -140,7 +141,7 @@ class EngineProcess:
         child = _Child()
         self._child = child
         self._finalizer = weakref.finalize(self, child.end)  # an engine dropped unclosed ends its child
-        self._exchange(None)  # the engine built, or the factory's exception
+        self.engine_class = self._exchange(None)  # or the factory's exception
 
     def _exchange(self, request: Optional[_Request]) -> Any:
         """What the child answers to ``request``; None: to the start (sys.path, the factory)."""
@@ -187,7 +188,7 @@ def serve(connection: Connection) -> None:
         except (Exception, SystemExit) as error:
             connection.send(_failure(error))
             return
-        connection.send((True, None))
+        connection.send((True, type(engine).__name__))
         while True:
             reply = _answer(engine, connection.recv())
             try:

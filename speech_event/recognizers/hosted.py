@@ -3,7 +3,7 @@
 The node finds an engine's abilities with ``isinstance`` (speech_event/ports.py), so a hosted
 engine's class combines exactly the classes of the ports its engine implements: ``HostedRecognizer``
 always, ``HostedGrammars`` and ``HostedIncremental`` as the engine has them. None is Stoppable: a
-hosted call cannot be stopped halfway.
+hosted call cannot be stopped halfway. Each is ``Hosted``: transcripts name the engine it runs.
 """
 
 from types import TracebackType
@@ -26,6 +26,11 @@ class HostedRecognizer:
     def __init__(self, name: str, factory: EngineFactory) -> None:
         self.process = EngineProcess(name, factory, self._replayed)
         self._sample_rate = int(self.process.read("sample_rate"))  # fixed: read once
+
+    @property
+    def hosts(self) -> str:
+        """The class name of the engine it runs (the Hosted port): what transcripts call it."""
+        return self.process.engine_class
 
     @property
     def sample_rate(self) -> int:

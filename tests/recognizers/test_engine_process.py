@@ -43,6 +43,7 @@ def test_calls_run_in_the_child(stub: EngineProcess) -> None:
     assert stub.call("pid") == stub.pid != os.getpid()
     assert stub.call("echo", {"a": [1, 2]}) == {"a": [1, 2]}
     assert stub.read("sample_rate") == 8000
+    assert stub.engine_class == "StubEngine"
 
 
 @pytest.mark.parametrize(

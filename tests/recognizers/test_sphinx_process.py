@@ -15,7 +15,7 @@ from fixtures import recordings
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import load_grammar, phrases_grammar
-from speech_event.ports import Grammars, Incremental, Stoppable, Transcript
+from speech_event.ports import Grammars, Incremental, Stoppable, Transcript, engine_name
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.engine_process import EngineProcessError
 from speech_event.recognizers.sphinx import SphinxRecognizer
@@ -112,6 +112,7 @@ def test_the_engines_built_by_name_are_hosted_with_exactly_the_abilities_of_the_
             ]
             assert [isinstance(engine, a) for a in abilities] == [True, True, False]
             assert engine.sample_rate == 16000
+            assert engine_name(engine) == "SphinxRecognizer"  # transcripts name it as before
 
 
 def test_the_engines_errors_are_raised_with_their_type_and_message(
