@@ -59,7 +59,7 @@ def test_the_engines_exceptions_are_raised_with_their_type_and_message(
     assert stub.call("echo", 1) == 1  # the engine goes on
 
 
-def test_what_cannot_cross_the_pipe_is_raised_as_an_engine_process_error_or_pickles_error(
+def test_an_exception_or_an_answer_that_cannot_cross_the_pipe_fails_only_its_call(
     stub: EngineProcess,
 ) -> None:
     with pytest.raises(EngineProcessError) as raised:
