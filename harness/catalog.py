@@ -5,7 +5,7 @@ import importlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -15,10 +15,9 @@ from fixtures.festival import festival_voice
 from fixtures.tts import speak_tts
 from speech_event.config import PATH_KEYS, SpeechEventConfig
 from speech_event.errors import ModelError
-from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS as ENGINES
-from speech_event.recognizers import engine_builder
+from speech_event.recognizers.hosted import HostedRecognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, PARAKEET
 from speech_event.recognizers.whisper.manifest import WHISPER
 
@@ -139,12 +138,27 @@ def engine_for(name: str, config: SpeechEventConfig) -> Tuple[str, SpeechEventCo
     )
 
 
-def recognizer_for(name: str, config: SpeechEventConfig) -> Recognizer:
-    engine, engine_config = engine_for(name, config)
-    return ENGINES[engine](engine_config)
+class ScenarioEngines:
+    """The engines a run builds for a scenario's recognizer: the node's, and any set_language asks
+    for (``build`` is the node's EngineBuilder). Closed at the end of the run: pocketsphinx runs in
+    a process of its own, which would live on until the garbage collector came to its engine (a
+    test session held 15 at once, 130 MB or more each)."""
 
+    def __init__(self, name: str, config: SpeechEventConfig) -> None:
+        self._engine, self._config = engine_for(name, config)
+        self._built: List[Recognizer] = []
 
-def engine_builder_for(name: str, config: SpeechEventConfig) -> EngineBuilder:
-    """How the node builds another language's engine (set_language) for a scenario's recognizer."""
-    engine, engine_config = engine_for(name, config)
-    return engine_builder(engine, engine_config)
+    def build(self, language: Optional[str] = None) -> Recognizer:
+        """The engine of ``language`` (None: the configured one); ModelError when it cannot be built."""
+        config = self._config if language is None else dataclasses.replace(self._config, language=language)
+        engine = ENGINES[self._engine](config)
+        self._built.append(engine)
+        return engine
+
+    def __enter__(self) -> "ScenarioEngines":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        for engine in self._built:
+            if isinstance(engine, HostedRecognizer):
+                engine.close()

@@ -46,7 +46,7 @@ def _memory(
     stack: ExitStack, node_config: SpeechEventConfig, recognizer_name: str
 ) -> Tuple[Link, Clock, Callable[[], bool]]:
     """Speech Event itself on the in-memory bus, on the wall clock; its texts printed."""
-    from harness.catalog import engine_builder_for, recognizer_for
+    from harness.catalog import ScenarioEngines
     from speech_event.adapters.executors import ThreadExecutor
     from speech_event.adapters.memory_bus import InMemoryBus
     from speech_event.adapters.system_clock import SystemClock
@@ -55,14 +55,8 @@ def _memory(
 
     bus, clock, executor = InMemoryBus(), SystemClock(), ThreadExecutor()
     bus.subscribe(TEXT_TOPIC, String, lambda m: print(f"{TEXT_TOPIC}: {m.data!r}", flush=True))  # type: ignore[attr-defined]
-    node = SpeechEventNode(
-        node_config,
-        bus,
-        clock,
-        recognizer_for(recognizer_name, node_config),
-        executor,
-        engine_builder_for(recognizer_name, node_config),
-    )
+    engines = stack.enter_context(ScenarioEngines(recognizer_name, node_config))  # closed after finish
+    node = SpeechEventNode(node_config, bus, clock, engines.build(), executor, engines.build)
     node.start()
 
     def finish() -> None:

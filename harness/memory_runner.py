@@ -2,7 +2,7 @@
 
 from typing import Callable, List, Optional
 
-from harness.catalog import engine_builder_for, recognizer_for
+from harness.catalog import ScenarioEngines
 from harness.outcome import Outcome, Published, result_text
 from harness.player import play
 from harness.scenario import Scenario
@@ -129,17 +129,13 @@ def run_in_memory(
     sound_detection = _SoundDetection(runner.bus)
     node_clock = _NodeClock(clock, runner.outcome.node_timers)
     executor = ClockExecutor(node_clock, recognition_seconds)
-    node = SpeechEventNode(
-        scenario.config,
-        runner.bus,
-        node_clock,
-        recognizer_for(scenario.recognizer, scenario.config),
-        executor,
-        engine_builder_for(scenario.recognizer, scenario.config),
-    )
-    node.start()
-    play(timeline, runner, sound_detection)
-    clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
-    node.stop()
-    node.flush_storage()
+    with ScenarioEngines(scenario.recognizer, scenario.config) as engines:
+        node = SpeechEventNode(
+            scenario.config, runner.bus, node_clock, engines.build(), executor, engines.build
+        )
+        node.start()
+        play(timeline, runner, sound_detection)
+        clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
+        node.stop()
+        node.flush_storage()
     return runner.outcome

@@ -12,7 +12,7 @@ from typing import Dict, List
 
 import numpy as np
 
-from harness.catalog import recognizer_for
+from harness.catalog import ScenarioEngines
 from harness.driver import read_audio
 from harness.scenario import ScenarioError
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
@@ -54,20 +54,21 @@ def replay_storage(directory: str, recognizer_name: str, base: SpeechEventConfig
     )
     recognizers: Dict[str, Recognizer] = {}
     counts = {"same": 0, "changed": 0, "gone": 0}
-    for line in read_index(folder):
-        if not (folder / line.file).is_file():
-            counts["gone"] += 1
-            print(f"gone     {line.file}  (removed to keep the folder under audio_storage_max_mb)")
-            continue
-        language_config = dataclasses.replace(config, language=line.language)
-        if line.language not in recognizers:
-            recognizers[line.language] = recognizer_for(recognizer_name, language_config)
-        audio = read_audio(folder / line.file, STORED_RATE)
-        now = published_for(audio, language_config, recognizers[line.language])
-        then = [line.published] if line.published is not None else []
-        verdict = "same" if now == then else "changed"
-        counts[verdict] += 1
-        print(f"{verdict:<8} {line.file}  {_said(then)}" + ("" if now == then else f" -> {_said(now)}"))
+    with ScenarioEngines(recognizer_name, config) as engines:
+        for line in read_index(folder):
+            if not (folder / line.file).is_file():
+                counts["gone"] += 1
+                print(f"gone     {line.file}  (removed to keep the folder under audio_storage_max_mb)")
+                continue
+            if line.language not in recognizers:
+                recognizers[line.language] = engines.build(line.language)
+            audio = read_audio(folder / line.file, STORED_RATE)
+            language_config = dataclasses.replace(config, language=line.language)
+            now = published_for(audio, language_config, recognizers[line.language])
+            then = [line.published] if line.published is not None else []
+            verdict = "same" if now == then else "changed"
+            counts[verdict] += 1
+            print(f"{verdict:<8} {line.file}  {_said(then)}" + ("" if now == then else f" -> {_said(now)}"))
     print(f"{counts['same']} same, {counts['changed']} changed, {counts['gone']} gone")
     return 1 if counts["changed"] else 0
 

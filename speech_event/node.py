@@ -44,7 +44,7 @@ from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
 from speech_event.pipeline.worker import Worker
-from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Transport
+from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Transport, engine_name
 from speech_event.speculation import SpeculationCounts
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
 from speech_event.turn_taking import TurnTaking
@@ -242,7 +242,7 @@ class SpeechEventNode:
         if not self._enabled or pending == 0:
             return None
         first = self._collecting_since if self._collecting_since is not None else last
-        origin = TextOrigin(self._language, type(self._recognizer).__name__, first, last)
+        origin = TextOrigin(self._language, engine_name(self._recognizer), first, last)
         return UtteranceSoFar(pending, self._assembler.peek, self._recognizer, self._grammar, origin)
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:
@@ -326,13 +326,13 @@ class SpeechEventNode:
 
     def _sound_detection_down(self) -> None:
         language, engine = self._in_force()[:2]
-        self._publication.publish_error(SOUND_DETECTION_DOWN, language, type(engine).__name__)
+        self._publication.publish_error(SOUND_DETECTION_DOWN, language, engine_name(engine))
         self._action.sound_detection_down()
 
     def _state(self, sound_detection: PublisherStatus) -> NodeState:
         with self._lock:
             return NodeState(
-                engine=type(self._recognizer).__name__,
+                engine=engine_name(self._recognizer),
                 language=self._language,
                 grammar="" if self._grammar is None else self._grammar.source,
                 enabled=self._enabled,

@@ -2,8 +2,8 @@
 
 Adapters implement these: the in-memory bus and the rospy transport, the fake and ROS clocks,
 the recognition engines and their fakes, the simulated and threaded workers. What only some
-engines can do is a Protocol of its own (``Stoppable``, ``Grammars``, ``Incremental``), checked with
-``isinstance``: an engine has the ability by having its method.
+engines can do is a Protocol of its own (``Stoppable``, ``Grammars``, ``Incremental``, ``Hosted``),
+checked with ``isinstance``: an engine has the ability by having its method.
 """
 
 import enum
@@ -194,3 +194,19 @@ class Incremental(Protocol):
     def feed_partial(self, audio: Audio) -> Transcript:
         """The next samples of the utterance (at ``sample_rate``): the text of all of it so far."""
         ...
+
+
+@runtime_checkable
+class Hosted(Protocol):
+    """An engine that runs another in a process of its own (speech_event/recognizers/hosted.py)."""
+
+    @property
+    def hosts(self) -> str:
+        """The class name of the engine it runs."""
+        ...
+
+
+def engine_name(engine: object) -> str:
+    """What transcripts, stored utterances and logs call an engine: its class's name; for a Hosted
+    one, the name of the engine it runs, as when that runs in the node's process."""
+    return engine.hosts if isinstance(engine, Hosted) else type(engine).__name__

@@ -24,7 +24,7 @@ from speech_event.errors import ConfigError, GrammarError, ModelError
 from speech_event.grammar import FREE_SPEECH, Grammar, load_grammar, requested_grammar
 from speech_event.interfaces.language_engines import LanguageEngines
 from speech_event.messages import SetEnabledResponse, SetGrammarResponse, SetLanguageResponse
-from speech_event.ports import Grammars, Recognizer
+from speech_event.ports import Grammars, Recognizer, engine_name
 
 _LOG = logging.getLogger("speech_event")
 
@@ -129,7 +129,7 @@ ALLOWED_GRAMMAR = "a JSGF or phrase file, phrases parted by |, or empty for free
 def cannot_use(engine: Recognizer, grammar: Grammar) -> Optional[str]:
     """Why ``engine`` cannot decode within ``grammar``, or None when it can."""
     if not isinstance(engine, Grammars):
-        return f"the {type(engine).__name__} engine takes no grammar"
+        return f"the {engine_name(engine)} engine takes no grammar"
     try:
         engine.check_grammar(grammar)
     except GrammarError as problem:

@@ -15,7 +15,7 @@ from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
 from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, String, TranscriptMessage
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.transcript import checked_transcript, text_to_publish
-from speech_event.ports import Publisher, Transcript, Transport
+from speech_event.ports import Publisher, Transcript, Transport, engine_name
 from speech_event.topics import PARTIAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 
 _LOG = logging.getLogger("speech_event")
@@ -134,7 +134,7 @@ class Publication:
             else:
                 _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
             if text is not None:
-                engine = type(recognizer).__name__
+                engine = engine_name(recognizer)
                 origin = TextOrigin(job.language, engine, job.started_at, job.last_block_at)
                 self.publish(text, origin, transcript.confidence)
                 self.statistics.published()
@@ -147,7 +147,7 @@ class Publication:
                 functools.partial(
                     StoredUtterance,
                     language=job.language,
-                    engine=type(recognizer).__name__,
+                    engine=engine_name(recognizer),
                     transcript=transcript.text,
                     published=text,
                     recognition_time=round(took, 6),

@@ -82,14 +82,13 @@ def whisper(config: SpeechEventConfig) -> Recognizer:
 
 
 def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
-    """The embedded pocketsphinx engine (English only), with the configured grammar or keyword list."""
-    from speech_event.recognizers.sphinx import SphinxRecognizer
+    """The embedded pocketsphinx engine (English only), with the configured grammar or keyword list,
+    in a process of its own (sphinx_process.py: it would stall the node's threads)."""
+    from speech_event.recognizers.sphinx_process import SphinxProcess
 
     if config.language != "english":
         raise ModelError(f"pocketsphinx transcribes English only; language is {config.language}")
-    return SphinxRecognizer(
-        configured_grammar(config), config.pocketsphinx_keywords, config.grammar_threshold
-    )
+    return SphinxProcess(configured_grammar(config), config.pocketsphinx_keywords, config.grammar_threshold)
 
 
 def auto(config: SpeechEventConfig) -> Recognizer:

@@ -179,6 +179,8 @@ class SphinxRecognizer:
     def feed_partial(self, audio: np.ndarray) -> Transcript:
         """The best path so far after ``audio`` (for a grammar: the phrase so far, which need not
         be whole; for keywords: the keywords heard so far)."""
+        if not self._partial_open:  # pocketsphinx would answer nothing, and say nothing of why
+            raise RuntimeError("feed_partial before begin_partial: no utterance on the partial decoder")
         decoder = self._partial_decoder()
         if audio.size:  # a resampler's first piece may be empty; pocketsphinx raises on no samples
             decoder.process_raw(_pcm(audio), no_search=False, full_utt=False)

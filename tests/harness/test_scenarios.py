@@ -12,6 +12,7 @@ from harness.report import passed, report
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
 from speech_event.config import SpeechEventConfig
 from tests.helpers.paths import ROOT
+from tests.helpers.processes import children
 from tests.helpers.scenario_files import SCENARIOS
 
 
@@ -38,6 +39,15 @@ def test_a_replay_is_deterministic_to_the_message_and_the_time() -> None:
     block = 4096 / 48000
     # "hello" fills 5 blocks; the 1.5 s pause closes it; checks at 2, 4, 6 s find soundDetection down.
     assert [message.time for message in first[:4]] == pytest.approx([5 * block + 1.5, 2.0, 4.0, 6.0])
+
+
+def test_a_run_leaves_no_engine_process_behind() -> None:
+    """pocketsphinx runs in a process of its own: each in-memory run closes the engines it built,
+    or a test session would hold one per run until the garbage collector found it."""
+    before = children()
+    scenario = load_scenario(ROOT / "scenarios" / "tts_command.toml", SpeechEventConfig())
+    assert passed(scenario, run_in_memory(scenario))
+    assert children() == before
 
 
 MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"published": ["hi"]}}

@@ -15,6 +15,7 @@ from speech_event.ports import Transcript
 from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.sphinx import SphinxRecognizer
+from speech_event.recognizers.sphinx_process import SphinxProcess
 from tests.helpers.application import run_application
 from tests.helpers.paths import ROOT
 
@@ -40,7 +41,9 @@ def test_a_missing_keyword_list_is_named(tmp_path: Path) -> None:
 
 
 def test_auto_picks_pocketsphinx_for_english_without_a_model_and_nemo_with_one(tmp_path: Path) -> None:
-    assert isinstance(RECOGNIZERS["auto"](SpeechEventConfig()), SphinxRecognizer)
+    sphinx = RECOGNIZERS["auto"](SpeechEventConfig())
+    assert isinstance(sphinx, SphinxProcess)  # in a process of its own: test_sphinx_process.py
+    sphinx.close()
     model = build_random_transducer(tmp_path / "en")
     chosen = RECOGNIZERS["auto"](SpeechEventConfig(en_model_path=str(model)))
     assert isinstance(chosen, NemoRecognizer)
