@@ -17,6 +17,7 @@ from speech_event.config import PATH_KEYS, SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS as ENGINES
+from speech_event.recognizers import SIMULATED_RECOGNIZERS
 from speech_event.recognizers.hosted import HostedRecognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, PARAKEET
 from speech_event.recognizers.whisper.manifest import WHISPER
@@ -149,14 +150,17 @@ class ScenarioEngines:
     a process of its own, which would live on until the garbage collector came to its engine (a
     test session held 15 at once, 130 MB or more each)."""
 
-    def __init__(self, name: str, config: SpeechEventConfig) -> None:
+    def __init__(self, name: str, config: SpeechEventConfig, simulated: bool = False) -> None:
+        """``simulated``: for a node on a simulated clock and worker, where pocketsphinx may run in
+        this process (nothing runs beside a recognition there), saving a process start a run."""
         self._engine, self._config = engine_for(name, config)
+        self._factories = SIMULATED_RECOGNIZERS if simulated else ENGINES
         self._built: List[Recognizer] = []
 
     def build(self, language: Optional[str] = None) -> Recognizer:
         """The engine of ``language`` (None: the configured one); ModelError when it cannot be built."""
         config = self._config if language is None else dataclasses.replace(self._config, language=language)
-        engine = ENGINES[self._engine](config)
+        engine = self._factories[self._engine](config)
         self._built.append(engine)
         return engine
 

@@ -129,7 +129,7 @@ def run_in_memory(
     sound_detection = _SoundDetection(runner.bus)
     node_clock = _NodeClock(clock, runner.outcome.node_timers)
     executor = ClockExecutor(node_clock, recognition_seconds)
-    with ScenarioEngines(scenario.recognizer, scenario.config) as engines:
+    with ScenarioEngines(scenario.recognizer, scenario.config, simulated=True) as engines:
         node = SpeechEventNode(
             scenario.config, runner.bus, node_clock, engines.build(), executor, engines.build
         )

@@ -86,28 +86,55 @@ def pocketsphinx(config: SpeechEventConfig) -> Recognizer:
     in a process of its own (sphinx_process.py: it would stall the node's threads)."""
     from speech_event.recognizers.sphinx_process import SphinxProcess
 
-    if config.language != "english":
-        raise ModelError(f"pocketsphinx transcribes English only; language is {config.language}")
+    _check_english(config)
     return SphinxProcess(configured_grammar(config), config.pocketsphinx_keywords, config.grammar_threshold)
 
 
-def auto(config: SpeechEventConfig) -> Recognizer:
-    """The model of the family ``model`` names; pocketsphinx for English without a model of the
-    default family. Never falls back silently from another family asked for."""
-    if config.model == WHISPER:
-        return whisper(config)
-    if config.language == "english" and not config.en_model_path and config.model == CONFORMER_TRANSDUCER:
-        return pocketsphinx(config)
-    return nemo(config)
+def pocketsphinx_in_process(config: SpeechEventConfig) -> Recognizer:
+    """pocketsphinx in the caller's process: for a node on a simulated clock and worker (the
+    scenarios in memory), where nothing runs beside a recognition for it to stall."""
+    from speech_event.recognizers.sphinx import SphinxRecognizer
+
+    _check_english(config)
+    return SphinxRecognizer(
+        configured_grammar(config), config.pocketsphinx_keywords, config.grammar_threshold
+    )
 
 
-RECOGNIZERS: Dict[str, RecognizerFactory] = {
-    "auto": auto,
-    "nemo": nemo,
-    "whisper": whisper,
-    "pocketsphinx": pocketsphinx,
-    "fake": lambda config: ToneRecognizer(configured_grammar(config)),
-}
+def _check_english(config: SpeechEventConfig) -> None:
+    if config.language != "english":
+        raise ModelError(f"pocketsphinx transcribes English only; language is {config.language}")
+
+
+def automatic(english: RecognizerFactory) -> RecognizerFactory:
+    """``auto`` with ``english`` as its embedded English engine."""
+
+    def auto(config: SpeechEventConfig) -> Recognizer:
+        """The model of the family ``model`` names; the embedded engine for English without a model
+        of the default family. Never falls back silently from another family asked for."""
+        if config.model == WHISPER:
+            return whisper(config)
+        if config.language == "english" and not config.en_model_path and config.model == CONFORMER_TRANSDUCER:
+            return english(config)
+        return nemo(config)
+
+    return auto
+
+
+def recognizers(embedded: RecognizerFactory) -> Dict[str, RecognizerFactory]:
+    """The engines by name, ``embedded`` the pocketsphinx engine's factory."""
+    return {
+        "auto": automatic(embedded),
+        "nemo": nemo,
+        "whisper": whisper,
+        "pocketsphinx": embedded,
+        "fake": lambda config: ToneRecognizer(configured_grammar(config)),
+    }
+
+
+RECOGNIZERS = recognizers(pocketsphinx)
+# On a simulated clock and worker: pocketsphinx in the caller's process, saving its start.
+SIMULATED_RECOGNIZERS = recognizers(pocketsphinx_in_process)
 
 
 def engine_builder(name: str, config: SpeechEventConfig) -> EngineBuilder:
