@@ -75,10 +75,17 @@ class NemoRecognizer:
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
         self._grammars = CompiledGrammars(self._phrase_tokens)
         self._grammars.use(grammar)
+        self._last_choice: Optional[GrammarChoice] = None
 
     @property
     def sample_rate(self) -> int:
         return self._manifest.features.sample_rate
+
+    @property
+    def last_choice(self) -> Optional[GrammarChoice]:
+        """The grammar decision of the last transcribe within a grammar (its free text and every
+        phrase's score: the ratio each was judged by); None after free speech."""
+        return self._last_choice
 
     def check_grammar(self, grammar: Grammar) -> None:
         """Every phrase must be spelt by the model's vocabulary."""
@@ -118,6 +125,7 @@ class NemoRecognizer:
 
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = self._runs.start()
+        self._last_choice = None
         encoded = self._encoded(audio, run)
         found = self._greedy(encoded, run)
         grammar = self._grammars.in_force
@@ -135,6 +143,7 @@ class NemoRecognizer:
         """The phrase of the grammar said, or none: the greedy tokens and every phrase scored exactly."""
         scores = self.log_likelihoods(encoded, [found.tokens, *phrases.values()], run)
         choice = GrammarChoice(self._vocabulary.text(found.tokens), scores[0], dict(zip(phrases, scores[1:])))
+        self._last_choice = choice
         answer = choice.transcript(self._threshold)
         if not answer.text:
             return answer

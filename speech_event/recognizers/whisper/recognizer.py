@@ -87,6 +87,7 @@ class WhisperRecognizer:
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
         self._grammars = CompiledGrammars(self._forms)
         self._grammars.use(grammar)
+        self._last_choice: Optional[GrammarChoice] = None
 
     @property
     def sample_rate(self) -> int:
@@ -119,9 +120,16 @@ class WhisperRecognizer:
         decoding = self._model.decoding(whisper_log_mel(audio, self._manifest.mel_bands), run)
         return whisper_greedy(decoding, self._prompt, self._manifest)
 
+    @property
+    def last_choice(self) -> Optional[GrammarChoice]:
+        """The grammar decision of the last transcribe within a grammar (its free text and every
+        phrase's score: the ratio each was judged by); None after free speech."""
+        return self._last_choice
+
     def transcribe(self, audio: np.ndarray) -> Transcript:
         run = self._runs.start()
         grammar = self._grammars.in_force
+        self._last_choice = None
         if grammar is not None:
             return self._within(
                 self._grammars.compiled(grammar),
@@ -155,6 +163,7 @@ class WhisperRecognizer:
             free.score,
             best,
         )
+        self._last_choice = choice
         no_speech = free.no_speech_prob
         return choice.transcript(self._threshold, None if no_speech is None else 1.0 - no_speech)
 
