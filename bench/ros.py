@@ -7,7 +7,6 @@ Also the per-block cost including the conversion of the ROS message to numpy.
 
 import contextlib
 import io
-import os
 import statistics
 import time
 import xmlrpc.client
@@ -19,9 +18,10 @@ import rospy
 from rospy.numpy_msg import numpy_msg
 from std_msgs import msg as std_msgs
 
-from bench.ros_graph import ROOT, RosGraph, ros_graph
+from bench import latency
+from bench.ros_graph import RosGraph, ros_graph
 from fixtures.audio import noise, speak_tones
-from fixtures.tones_model import build_tones_model
+from harness.catalog import TRAINED_MODELS
 from harness.processes import ReplayError, wait_until
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -147,51 +147,13 @@ def service_round_trips(calls: int = 200) -> None:
         )
 
 
-def engines_on_roscore(graph: RosGraph, runs: int = 2) -> None:
-    """bench/latency.py's figure (a) on a real roscore: the node as its own process with each
-    engine, utterances of 1 to 10 s published at once, last block to text minus the pause."""
-    from bench.latency import LENGTHS, _speech
-
-    tones = build_tones_model(graph.work / "tones")
-    grammar = ROOT / "harness" / "data" / "robot_commands.txt"
-    engines = [
-        ("fake (tones)", "fake", "", "tones"),
-        ("NeMo engine, tones fixture model", "nemo", f"en_model_path {tones}\n", "tones"),
-        ("pocketsphinx grammar", "pocketsphinx", f"grammar {grammar}\n", "tts"),
-        ("pocketsphinx language model", "pocketsphinx", "", "tts"),
-    ]
-    large = os.environ.get("SPEECH_EVENT_LARGE_MODEL")  # see bench/latency.py
-    if large:
-        engines.append(("large conformer (119 M, random weights)", "nemo", f"en_model_path {large}\n", "tts"))
-    arrivals: List[float] = []
-    graph.transport.subscribe(TEXT_TOPIC, String, lambda message: arrivals.append(time.perf_counter()))
-    pause = SpeechEventConfig().speech_pause_period
-    for name, recognizer, settings, voice in engines:
-        for speculating in (False, True):
-            node = graph.start_node(
-                settings + "publish_unrecognized true\nmax_utterance_length 30\n"
-                f"speculative_recognition {str(speculating).lower()}\n",
-                recognizer,
-                graph.subscribed(TEXT_TOPIC),
-            )
-            for seconds in LENGTHS:
-                audio = _speech(voice, seconds)
-                latencies = []
-                for _ in range(runs):
-                    count = len(arrivals)
-                    for start in range(0, audio.size, BLOCK):
-                        graph.signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
-                    last_block = time.perf_counter()
-                    wait_until(_more_than(arrivals, count), "the text", 60)
-                    latencies.append(arrivals[-1] - last_block - pause)
-                    time.sleep(0.2)
-                print(
-                    f"roscore: {name:34s} {seconds:4.0f} s, {'with' if speculating else 'without'} "
-                    f"speculation: median {1000 * statistics.median(latencies):6.0f} ms, "
-                    f"max {1000 * max(latencies):6.0f} ms",
-                    flush=True,
-                )
-            graph.stop_node(node)
+def engines_on_roscore(graph: RosGraph) -> None:
+    """bench/latency.py's figure (a) on a real roscore, 2 runs each, for its engines but the trained
+    Whisper models (python -m bench.latency --roscore whisper runs those)."""
+    chosen = {
+        name: engine for name, engine in latency.engines().items() if engine.recognizer not in TRAINED_MODELS
+    }
+    latency.roscore_latency(graph, chosen, runs=2)
 
 
 def _more_than(texts: List[Any], count: int) -> Callable[[], bool]:
