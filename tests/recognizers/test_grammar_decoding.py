@@ -78,8 +78,10 @@ def test_a_threshold_lenient_enough_publishes_a_phrase_with_one_word_heard_other
 @pytest.mark.parametrize("engine", list(ENGINES))
 def test_the_engine_shows_its_last_grammar_decision(engine: str) -> None:
     recognizer = ENGINES[engine](COMMANDS, -5.0)
+    assert isinstance(recognizer, (NemoRecognizer, WhisperRecognizer))
     assert _transcribe(recognizer, "go lefts") == Transcript("", rejected="go left")
-    choice = recognizer.last_choice  # type: ignore[attr-defined]
+    choice = recognizer.last_choice
+    assert choice is not None and COMMANDS is not None
     assert (spelt(choice.free_text), sorted(choice.phrase_scores)) == (
         "go lefts",
         sorted(COMMANDS.phrases or ()),
@@ -87,7 +89,7 @@ def test_the_engine_shows_its_last_grammar_decision(engine: str) -> None:
     assert choice.ratio("go left") < -9.0  # a letter more: far beyond the threshold on the tones models
     recognizer.use_grammar(None)
     _transcribe(recognizer, "maybe")
-    assert recognizer.last_choice is None  # type: ignore[attr-defined]
+    assert recognizer.last_choice is None
 
 
 @pytest.mark.parametrize("engine", list(ENGINES))
