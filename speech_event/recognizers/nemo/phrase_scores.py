@@ -129,12 +129,15 @@ def _trie_log_probabilities(
                 run,
             )
             split = logits.shape[-1] - duration_count
+            # the whole chunk at once: per node, numpy's call overhead was most of a phrase score
+            tokens_lp = log_softmax(logits[:, :, :split])
+            durations_lp = log_softmax(logits[:, :, split:]) if duration_count else tokens_lp[:, :, :0]
             for i, prefix in enumerate(chunk):
-                token_lp = log_softmax(logits[i, :, :split])
+                token_lp = tokens_lp[i]
                 nodes[prefix] = _Node(
                     blank=token_lp[:, blank],
                     next_tokens={token: token_lp[:, token] for token in children[prefix]},
-                    durations=log_softmax(logits[i, :, split:]) if duration_count else token_lp[:, :0],
+                    durations=durations_lp[i],
                 )
                 next_states[prefix] = (after[0][:, i : i + 1], after[1][:, i : i + 1])
         states = next_states
