@@ -118,7 +118,7 @@ class Microphone:
             # the driver reads (the tests' file device) otherwise keeps PortAudio's thread calling
             # in, and the driver took over 30 s to end after SIGINT (2 CI runs in 5).
             if stop.is_set():
-                raise self._audio.CallbackStop
+                raise self._audio.CallbackAbort
             try:
                 blocks.put_nowait(indata.copy())
             except queue.Full:
@@ -129,14 +129,16 @@ class Microphone:
             if rate != self._config.sample_rate
             else None
         )
-        with self._audio.InputStream(
+        stream = self._audio.InputStream(
             device=index,
             channels=channels,
             samplerate=rate,
             blocksize=self._config.chunk_size,
             dtype="float32",
             callback=arrived,
-        ) as stream:
+        )
+        stream.start()
+        try:
             self._tell(f"capturing {name!r} (device {index}): {channels} channel(s) at {rate} Hz")
             while not stop.is_set():
                 try:
@@ -151,6 +153,11 @@ class Microphone:
                     mono = resampler.resample_chunk(mono)
                 if mono.size:
                     self._on_audio(np.clip(mono, -1.0, 1.0))
+        finally:
+            # Aborted, not stopped: what the device has not handed over yet is of no use, and
+            # stopping waits for PortAudio's buffers to drain.
+            stream.abort()
+            stream.close()
 
     def _report_overruns(self) -> None:
         """Blocks dropped because this thread fell behind: said at most every OVERRUN_REPORT s."""

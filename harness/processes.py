@@ -17,6 +17,8 @@ from typing import Callable, Dict, List, Sequence, Set
 
 # How long a replay waits for one real event (a message received, a connection made or dropped).
 EVENT_TIMEOUT = 20.0
+# The longest pause between two polls of a condition (wait_until).
+POLL_AT_MOST = 0.02
 
 
 class ReplayError(Exception):
@@ -24,12 +26,18 @@ class ReplayError(Exception):
 
 
 def wait_until(condition: Callable[[], bool], what: str, timeout: float = EVENT_TIMEOUT) -> None:
-    """Poll ``condition`` until it holds; a ReplayError naming ``what`` after ``timeout`` s."""
+    """Poll ``condition`` until it holds; a ReplayError naming ``what`` after ``timeout`` s.
+
+    The first polls follow each other closely (most events come within milliseconds), then ever
+    more slowly up to 20 ms: a condition is an XML-RPC call to the node or the master, and polling
+    every 2 ms took the CPU the node needed on a busy machine."""
     deadline = time.monotonic() + timeout
+    pause = 0.001
     while not condition():
         if time.monotonic() > deadline:
             raise ReplayError(f"gave up after {timeout:.0f} s waiting for {what}")
-        time.sleep(0.002)
+        time.sleep(pause)
+        pause = min(2 * pause, POLL_AT_MOST)
 
 
 def descendants(pid: int) -> Set[int]:
@@ -93,18 +101,24 @@ class Processes:
             return "(no output)"
         return "\n".join(lines[-count:]) or "(no output)"
 
-    def stop(self, process: "subprocess.Popen[str]", grace: float = 5.0) -> None:
-        if process.poll() is not None:
-            return
-        family = descendants(process.pid)  # before the signal: orphans are no longer below it
-        with contextlib.suppress(ProcessLookupError):  # it may have gone already
-            os.killpg(process.pid, signal.SIGINT)
-        try:
-            process.wait(grace)
-        except subprocess.TimeoutExpired:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
+    def stop(self, *processes: "subprocess.Popen[str]", grace: float = 5.0) -> None:
+        """SIGINT to each of ``processes`` (and its process group) at once, then wait for all:
+        a rospy node takes most of a second to shut down, and a replay stops two or more at the
+        end of every scenario. SIGKILL for what is left after ``grace`` seconds."""
+        running = [process for process in processes if process.poll() is None]
+        families = [descendants(process.pid) for process in running]  # orphans leave the tree
+        for process in running:
+            with contextlib.suppress(ProcessLookupError):  # it may have gone already
+                os.killpg(process.pid, signal.SIGINT)
+        deadline = time.monotonic() + grace
+        for process in running:
+            try:
+                process.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+        family = [pid for pids in families for pid in pids]
         deadline = time.monotonic() + grace
         while any(Path(f"/proc/{pid}").exists() for pid in family) and time.monotonic() < deadline:
             time.sleep(0.05)  # a clean roscore stops its rosmaster and rosout itself
@@ -113,5 +127,6 @@ class Processes:
                 os.kill(pid, signal.SIGKILL)
 
     def stop_all(self) -> None:
+        # one by one, the last started first: the nodes unregister while their roscore still runs
         for process in reversed(self._started):
             self.stop(process)

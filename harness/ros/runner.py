@@ -293,7 +293,7 @@ class RosReplay:
                 )
             if time.monotonic() > deadline:
                 raise ReplayError(f"gave up after {STARTUP_TIMEOUT:.0f} s waiting for the node to subscribe")
-            time.sleep(0.01)
+            time.sleep(0.05)  # a node takes most of a second to start: no need to ask the master more
 
     def _align_with_the_node(self, period: float) -> None:
         """Real time: start the scenario clock at one of the node's health-check instants, so its
@@ -319,6 +319,12 @@ class RosReplay:
             return False
         listening = any(topic == SIGNAL_TOPIC and names for topic, names in subscribers)
         return listening and self._text_subscriber.get_num_connections() > 0
+
+    def _node_connections(self) -> List[Any]:
+        """The live connections of this scenario's node on the signal topic."""
+        if self._node_uri is None:
+            raise ReplayError("no node under test is up")
+        return self._live_connections(self._node_uri)
 
     def _live_connections(self, node_uri: str, topic: str = SIGNAL_TOPIC) -> List[Any]:
         """The node's live connections on ``topic``, as getBusStats gives them:
@@ -346,16 +352,15 @@ class RosReplay:
         with contextlib.suppress(KeyError):
             rospy.delete_param(START_TIME_PARAM)  # the last scenario's node said it
         node = self._start_node(scenario)
+        # soundDetection's process starts beside the node's (each takes a second of Python and rospy)
+        stand_ins = StandIns(
+            self.processes, scenario.source, self._options.base_config, self._node_connections
+        )
         self._wait_for_node(node)
         if any(isinstance(event, SendGoal) for event in timeline.events):
             self._wait_for_the_action_server()
-        node_uri = self._node_uri = self._find_node()
-        stand_ins = StandIns(
-            self.processes,
-            scenario.source,
-            self._options.base_config,
-            lambda: self._live_connections(node_uri),
-        )
+        self._node_uri = self._find_node()
+        stand_ins.come_up_first()
         if self._options.real_time:
             self._align_with_the_node(scenario.config.health_check_period)
         play(timeline, self, stand_ins, self._schedule.stops)
@@ -363,8 +368,7 @@ class RosReplay:
         # check between stopping soundDetection and stopping the node is no part of the scenario.
         outcome, self._outcome = self._outcome, self._new_outcome()
         self._node_uri = None
-        stand_ins.stop()
-        self.processes.stop(node)
+        stand_ins.stop(node)
         return outcome
 
 

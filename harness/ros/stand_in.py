@@ -171,17 +171,26 @@ class StandIns:
             self._command += ["-c", base_config]
         self._live_connections = live_connections
         self._incarnations = 0
-        self._process = self._up(self._launch())
+        # started now, heard from in come_up_first: it starts while the node under test does
+        self._process = self._start()
         self._next: Optional[subprocess.Popen[str]] = None
         self._sent = 0  # messages this incarnation has published
         self._intruders: List[subprocess.Popen[str]] = []  # the wrong-type publishers started
 
-    def _launch(self) -> "subprocess.Popen[str]":
+    def _start(self) -> "subprocess.Popen[str]":
         name = "soundDetection" if self._incarnations == 0 else f"soundDetection{self._incarnations}"
         self._incarnations += 1
-        process = self._processes.start("sound_detection", [*self._command, "--name", name], talk=True)
+        return self._processes.start("sound_detection", [*self._command, "--name", name], talk=True)
+
+    def _launch(self) -> "subprocess.Popen[str]":
+        process = self._start()
         self._expect(process, "started")
         return process
+
+    def come_up_first(self) -> None:
+        """The first incarnation, started with the others, advertises."""
+        self._expect(self._process, "started")
+        self._up(self._process)
 
     def _up(self, process: "subprocess.Popen[str]") -> "subprocess.Popen[str]":
         self._tell(process, "advertise")
@@ -237,10 +246,9 @@ class StandIns:
         self._next = None
         self._sent = 0
 
-    def stop(self) -> None:
-        for process in (self._process, self._next):
-            if process is not None:
-                self._processes.stop(process)
+    def stop(self, *others: "subprocess.Popen[str]") -> None:
+        """Every incarnation shut down, with ``others`` (the node) at the same time."""
+        self._processes.stop(*[p for p in (self._process, self._next) if p is not None], *others)
         for intruder in self._intruders:
             if intruder.wait(EVENT_TIMEOUT) != 0:
                 raise ReplayError("the wrong-type publisher failed; see its log")

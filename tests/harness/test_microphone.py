@@ -140,8 +140,8 @@ def test_a_missing_device_is_said_once_with_the_devices_and_capture_starts_when_
     ]  # the rest of stderr: after the missing-device line the reader thread took
 
 
-class _CallbackStop(Exception):
-    """sounddevice.CallbackStop: the callback ends its stream."""
+class _CallbackAbort(Exception):
+    """sounddevice.CallbackAbort: the callback ends its stream at once."""
 
 
 class _FakeStream:
@@ -151,19 +151,21 @@ class _FakeStream:
         self._blocks, self._callback = blocks, callback
         self.active = True
 
-    def __enter__(self) -> "_FakeStream":
+    def start(self) -> None:
         def deliver() -> None:
             for block in self._blocks:
                 try:
                     self._callback(block, block.shape[0], None, None)
-                except _CallbackStop:
+                except _CallbackAbort:
                     break
             self.active = False
 
         threading.Thread(target=deliver, daemon=True).start()
-        return self
 
-    def __exit__(self, *exc: object) -> None:
+    def abort(self) -> None:
+        self.active = False
+
+    def close(self) -> None:
         self.active = False
 
 
@@ -171,7 +173,7 @@ class _FakeSounddevice:
     """sounddevice as the Microphone uses it: one device at 44.1 kHz that comes and goes."""
 
     PortAudioError = RuntimeError
-    CallbackStop = _CallbackStop
+    CallbackAbort = _CallbackAbort
 
     def __init__(self, sessions: List[List[np.ndarray]]) -> None:
         self.sessions = sessions  # the blocks of each time the device is opened

@@ -7,9 +7,10 @@ from typing import Any, Dict, List
 import pytest
 
 from harness.memory_runner import run_in_memory
-from harness.outcome import REAL_TIME, SIM_TIME
+from harness.outcome import REAL_TIME, SIM_TIME, Published
 from harness.report import passed, report
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
+from speech_event import SOUND_DETECTION_DOWN
 from speech_event.config import SpeechEventConfig
 from tests.helpers.paths import ROOT
 from tests.helpers.processes import children
@@ -328,3 +329,21 @@ def test_partials_are_checked_with_their_times_in_memory_by_their_texts_in_sim_t
     assert passed(late, sim_time)
     assert not passed(wrong, sim_time)
     assert passed(wrong, dataclasses.replace(outcome, clock=REAL_TIME))
+
+
+def test_in_real_time_an_error_may_come_before_a_text_still_being_recognized_but_no_text_may_change() -> None:
+    scenario = load_scenario(str(ROOT / "scenarios" / "outage_right_after_speech.toml"), SpeechEventConfig())
+    outcome = run_in_memory(scenario)
+    stop, error = outcome.published
+    assert (stop.text, error.text) == ("stop", SOUND_DETECTION_DOWN)
+    # "stop" recognized after the health check, as on a busy machine on the wall clock
+    late = dataclasses.replace(outcome, published=[error, Published(error.time + 0.1, "stop")])
+    assert passed(scenario, dataclasses.replace(late, clock=REAL_TIME))
+    assert not passed(scenario, dataclasses.replace(late, clock=SIM_TIME))
+    wrong = dataclasses.replace(
+        outcome, published=[error, Published(error.time + 0.1, "go")], clock=REAL_TIME
+    )
+    assert not passed(scenario, wrong)
+    assert "--- expected published texts\n      +++ published texts\n" in report(scenario, wrong)
+    twice = dataclasses.replace(wrong, published=[stop, error, error])
+    assert not passed(scenario, twice)
