@@ -15,12 +15,12 @@ Medians of RUNS (5) runs, min and max beside; the figures of one group are taken
 import functools
 import statistics
 import sys
-import threading
 import time
 from typing import Callable, Dict, List, Union
 
 import numpy as np
 
+from bench.measures import longest_stall
 from fixtures import recordings
 from speech_event.grammar import load_grammar
 from speech_event.ports import Audio, Transcript
@@ -78,25 +78,6 @@ def _first_utterance(build: Callable[[], Engine], audio: np.ndarray) -> float:
     return took
 
 
-def _longest_stall(engine: Engine, audio: np.ndarray) -> float:
-    ticks: List[float] = []
-    done = threading.Event()
-
-    def tick() -> None:
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.005)
-
-    ticker = threading.Thread(target=tick)
-    ticker.start()
-    time.sleep(0.05)
-    engine.transcribe(audio)
-    time.sleep(0.05)
-    done.set()
-    ticker.join()
-    return max(later - earlier for earlier, later in zip(ticks, ticks[1:]))
-
-
 def main(runs: int) -> None:
     # Under its module's name: run as __main__, this module's Sink pickles as __main__.Sink, which
     # the child (whose __main__ is its bootstrap) cannot find.
@@ -138,8 +119,8 @@ def main(runs: int) -> None:
         _rows(
             runs,
             {
-                "in process": functools.partial(_longest_stall, in_process, seven),
-                "hosted": functools.partial(_longest_stall, hosted, seven),
+                "in process": functools.partial(longest_stall, in_process, seven),
+                "hosted": functools.partial(longest_stall, hosted, seven),
             },
         )
 

@@ -5,12 +5,12 @@ threads never stalled while it decodes (issue 30)."""
 import os
 import signal
 import threading
-import time
 from typing import Iterator, List, Optional, Tuple, Union
 
 import numpy as np
 import pytest
 
+from bench.measures import longest_stall
 from fixtures import recordings
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import GrammarError, ModelError
@@ -63,40 +63,16 @@ def test_the_same_texts_and_ratios_as_in_the_nodes_process(hosted_cards: SphinxP
     ]
 
 
-def _longest_stall(engine: Engine, audio: np.ndarray) -> float:
-    """The longest a thread waking every 5 ms waited for its turn while ``engine`` transcribed."""
-    ticks: List[float] = []
-    done = threading.Event()
-
-    def tick() -> None:
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.005)
-
-    ticker = threading.Thread(target=tick)
-    ticker.start()
-    time.sleep(0.05)
-    began = time.perf_counter()
-    engine.transcribe(audio)
-    ended = time.perf_counter()
-    time.sleep(0.05)
-    done.set()
-    ticker.join()
-    return max(
-        later - earlier for earlier, later in zip(ticks, ticks[1:]) if later > began and earlier < ended
-    )
-
-
 def test_the_nodes_threads_go_on_while_the_hosted_engine_decodes(no_process_left: None) -> None:
     """Timed: see MOST_STALL_SECONDS. The engine in the node's process is measured too, so the test
     is shown to tell the two apart (a slower machine only makes that stall longer)."""
     audio = recordings.librivox()[0].samples()  # 7 s
     with SphinxProcess() as hosted:
         hosted.transcribe(audio[:16000])  # the decoder made, as it is after the first utterance
-        assert _longest_stall(hosted, audio) < MOST_STALL_SECONDS
+        assert longest_stall(hosted, audio) < MOST_STALL_SECONDS
     in_process = SphinxRecognizer()
     in_process.transcribe(audio[:16000])
-    assert _longest_stall(in_process, audio) > MOST_STALL_SECONDS
+    assert longest_stall(in_process, audio) > MOST_STALL_SECONDS
 
 
 def test_the_engines_built_by_name_are_hosted_with_exactly_the_abilities_of_the_engine(
