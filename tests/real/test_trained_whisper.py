@@ -14,9 +14,11 @@ import numpy as np
 
 from fixtures import recordings
 from fixtures.trained_whisper import tiny_en_directory
+from speech_event.grammar import phrases_grammar
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.manifest import load_whisper_manifest
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+from tests.helpers.paths import ROOT
 
 RECORDINGS = recordings.cards() + recordings.librivox()
 
@@ -51,3 +53,22 @@ def test_the_engine_gives_ctranslate2s_greedy_tokens_on_every_recording(tiny_en:
     engine = WhisperRecognizer(tiny_en, "english")
     tokens = [engine.decode(samples).tokens for samples in audio]
     assert tokens == [result.result().sequences_ids[0] for result in pending]
+
+
+def test_in_a_grammar_the_cards_are_published_as_said_and_other_speech_is_rejected(tiny_en: Path) -> None:
+    """The grammar of the five cards phrases and the robot's 32 commands, on the recordings: tiny.en
+    writes numbers in digits ("10 of clubs."), compared in words. The three-card utterance is heard
+    with "close" for "clubs", a word changed in a long phrase the model doubts (-24 nats): rejected.
+    No librivox sentence becomes a phrase."""
+    commands = (ROOT / "harness" / "data" / "robot_commands.txt").read_text().splitlines()
+    phrases = [recording.text for recording in recordings.cards()] + commands
+    engine = WhisperRecognizer(tiny_en, "english", grammar=phrases_grammar(phrases, "cards and commands"))
+    published = [engine.transcribe(recording.samples()).text for recording in RECORDINGS]
+    assert published == [
+        "ten of clubs",
+        "four queen of clubs",
+        "seven of clubs",
+        "five five",
+        "",
+        *[""] * len(recordings.librivox()),
+    ]

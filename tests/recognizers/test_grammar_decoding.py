@@ -14,7 +14,7 @@ from speech_event.errors import GrammarError
 from speech_event.grammar import Grammar, jsgf_grammar, requested_grammar
 from speech_event.ports import Grammars, Transcript
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.onnx.grammar_choice import GrammarChoice, one_word_changed, spelt
+from speech_event.recognizers.onnx.grammar_choice import GrammarChoice, number_words, one_word_changed, spelt
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
@@ -139,6 +139,36 @@ def test_the_choice_takes_the_free_text_when_it_is_a_phrase_else_the_best_phrase
     assert GrammarChoice("go lefts", -10.0, scores).transcript(-2.0, 0.5) == Transcript("go left", 0.5)
     assert GrammarChoice("go lefts", -10.0, scores).transcript(-1.9) == Transcript("", rejected="go left")
     assert spelt(" Go, LEFT! now's") == "go left now's"
+
+
+def test_numbers_whisper_writes_in_digits_are_compared_in_words() -> None:
+    # tiny.en on pocketsphinx-testdata's cards recordings, the phrases of cards.gram
+    assert spelt(" 10 of clubs.") == "ten of clubs"
+    assert spelt(" 4. Queen of Clothes") == "four queen of clothes"
+    assert spelt(" 5 5") == "five five"
+    assert (
+        spelt("at 7:45, 1,250 people and 3.5%")
+        == "at seven forty five one thousand two hundred fifty people and three five"
+    )
+    assert [
+        number_words(n) for n in (0, 13, 20, 42, 100, 118, 999, 1000, 2026, 21_000, 999_999, 1_000_000)
+    ] == [
+        "zero",
+        "thirteen",
+        "twenty",
+        "forty two",
+        "one hundred",
+        "one hundred eighteen",
+        "nine hundred ninety nine",
+        "one thousand",
+        "two thousand twenty six",
+        "twenty one thousand",
+        "nine hundred ninety nine thousand nine hundred ninety nine",
+        "one zero zero zero zero zero zero",
+    ]
+    scores = {"ten of clubs": -12.0, "seven of clubs": -13.0, "five five": -9.0}
+    assert GrammarChoice(" 10 of clubs.", -11.0, scores).transcript(-5.0) == Transcript("ten of clubs")
+    assert GrammarChoice(" 5 5", -9.0, scores).transcript(-5.0) == Transcript("five five")
 
 
 def test_only_a_phrase_of_two_words_or_more_with_one_word_heard_otherwise_is_taken_within_the_threshold() -> (

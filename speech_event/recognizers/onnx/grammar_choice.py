@@ -29,11 +29,57 @@ from speech_event.ports import Transcript
 NEURAL_GRAMMAR_THRESHOLD = -5.0
 
 _NOT_SPELT = re.compile(r"[^a-z' ]+")
+_NUMBER = re.compile(r"\d+")
+_THOUSANDS_COMMA = re.compile(r"(?<=\d),(?=\d{3}\b)")
+_ONES = [
+    "zero",
+    "one",
+    "two",
+    "three",
+    "four",
+    "five",
+    "six",
+    "seven",
+    "eight",
+    "nine",
+    "ten",
+    "eleven",
+    "twelve",
+    "thirteen",
+    "fourteen",
+    "fifteen",
+    "sixteen",
+    "seventeen",
+    "eighteen",
+    "nineteen",
+]
+_TENS = ["-", "-", "twenty", "thirty", "forty", "fifty", "sixty", "seventy", "eighty", "ninety"]
+
+
+def number_words(number: int) -> str:
+    """``number`` in words as a grammar spells it (1234: "one thousand two hundred thirty four");
+    from a million on, digit by digit."""
+    if number < 20:
+        return _ONES[number]
+    if number < 100:
+        return " ".join([_TENS[number // 10]] + ([_ONES[number % 10]] if number % 10 else []))
+    if number < 1000:
+        rest = [number_words(number % 100)] if number % 100 else []
+        return " ".join([_ONES[number // 100], "hundred", *rest])
+    if number < 1_000_000:
+        rest = [number_words(number % 1000)] if number % 1000 else []
+        return " ".join([number_words(number // 1000), "thousand", *rest])
+    return " ".join(_ONES[int(digit)] for digit in str(number))
 
 
 def spelt(text: str) -> str:
-    """``text`` as a grammar writes phrases: lower-case words of a-z and ', punctuation dropped."""
-    return " ".join(_NOT_SPELT.sub(" ", text.lower()).split())
+    """``text`` as a grammar writes phrases: lower-case words of a-z and ', punctuation dropped,
+    numbers in words. Whisper writes numbers in digits ("10 of clubs." for the cards recording of
+    "ten of clubs"), which a grammar of words would otherwise never match."""
+    words = _NUMBER.sub(
+        lambda digits: f" {number_words(int(digits.group()))} ", _THOUSANDS_COMMA.sub("", text)
+    )
+    return " ".join(_NOT_SPELT.sub(" ", words.lower()).split())
 
 
 @dataclass(frozen=True)
