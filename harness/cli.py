@@ -21,6 +21,7 @@ from harness.ros.schedule import TEXT_DEADLINE
 from harness.scenario import Say, Scenario, ScenarioError, load_scenario
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.application import stop_on_ctrl_c
 from speech_event.config import SpeechEventConfig, load_config
 from speech_event.errors import ConfigError, ModelError
 
@@ -174,6 +175,7 @@ def _replay_storage(arguments: argparse.Namespace) -> int:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
     parser = argparse.ArgumentParser(prog="python -m harness", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="replay scenario files and check what the node publishes")

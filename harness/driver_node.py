@@ -26,7 +26,7 @@ from harness.scenario import ScenarioError, load_scenario
 from harness.timeline import ComeUp, GoDown, Publish, build_timeline
 from harness.vad_gate import VadGate
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from speech_event.application import without_remappings
+from speech_event.application import stop_on_ctrl_c, without_remappings
 from speech_event.config import SpeechEventConfig, load_config
 from speech_event.errors import ConfigError, ModelError
 from speech_event.messages import Float32MultiArray
@@ -137,6 +137,7 @@ def _listen(config: DriverConfig, link: Link, stopped: Callable[[], bool]) -> No
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
     parser = argparse.ArgumentParser(prog="speech_event_driver", description=__doc__)
     parser.add_argument(
         "-c", "--config", required=True, help="driver configuration (the seed's Table 2 keys)"

@@ -7,6 +7,7 @@ running recognition 2 s to finish.
 
 import argparse
 import logging
+import signal
 import sys
 from typing import List, Optional
 
@@ -105,6 +106,14 @@ def run(config: SpeechEventConfig, recognizer: Recognizer, name: str, screen: Sp
     node.flush_storage()
 
 
+def stop_on_ctrl_c() -> None:
+    """Ctrl-C (SIGINT) raises KeyboardInterrupt, as every command here documents, also when the
+    process was started with SIGINT ignored: a shell starts its background jobs so (``cmd &`` in a
+    script, a CI runner's), Python then leaves it ignored, and SIGINT did nothing: the driver and
+    the harness ran on, and a replay waited out its grace period for each stand-in it stopped."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def without_remappings(argv: Optional[List[str]]) -> List[str]:
     """The command line (sys.argv by default) without rospy's remappings (name:=value, __name:=...)."""
     return [word for word in (sys.argv[1:] if argv is None else argv) if ":=" not in word]
@@ -112,6 +121,7 @@ def without_remappings(argv: Optional[List[str]]) -> List[str]:
 
 def main(argv: Optional[List[str]] = None) -> int:
     """The ``speech-event`` command (the node, or export-nemo, export-whisper, pull); returns its status."""
+    stop_on_ctrl_c()
     raw = without_remappings(argv)
     if raw[:1] == ["export-nemo"]:
         from speech_event.exporters.nemo import main as export_nemo

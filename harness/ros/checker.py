@@ -14,10 +14,11 @@ from harness.report import passed, report
 from harness.ros.stand_in import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from speech_event import TEXT_TOPIC
-from speech_event.application import without_remappings
+from speech_event.application import stop_on_ctrl_c, without_remappings
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
     parser = argparse.ArgumentParser(prog="speech_event_checker")
     add_scenario_arguments(parser)
     arguments = parser.parse_args(without_remappings(argv))

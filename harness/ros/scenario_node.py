@@ -7,11 +7,12 @@ from typing import List, Optional
 
 from harness.catalog import engine_for
 from harness.scenario import ScenarioError, add_scenario_arguments, scenario_from_arguments
-from speech_event.application import build_recognizer, build_screen, run, without_remappings
+from speech_event.application import build_recognizer, build_screen, run, stop_on_ctrl_c, without_remappings
 from speech_event.errors import ConfigError
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
     parser = argparse.ArgumentParser(prog="speech_event_scenario_node")
     add_scenario_arguments(parser)
     arguments = parser.parse_args(without_remappings(argv))

@@ -32,7 +32,7 @@ from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosPublisher, RosTransport
-from speech_event.application import without_remappings
+from speech_event.application import stop_on_ctrl_c, without_remappings
 from speech_event.messages import Float32MultiArray
 
 CONNECT_TIMEOUT = 30.0
@@ -112,6 +112,7 @@ def _play_alone(timeline: Timeline, publisher: RosPublisher, wrong_type_command:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
     parser = argparse.ArgumentParser(prog="sound_detection_replay")
     add_scenario_arguments(parser)
     parser.add_argument("--wrong-type", type=int, metavar="I", help="publish event I as another node")

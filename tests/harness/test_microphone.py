@@ -46,7 +46,13 @@ def _virtual_microphone(home: Path, channels: List[np.ndarray]) -> None:
     (home / ".asoundrc").write_text(ASOUNDRC.format(infile=home / "speech.raw"))
 
 
+def _ignoring_ctrl_c() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _driver(home: Path, config: str) -> "subprocess.Popen[str]":
+    """The driver on the microphone, started with SIGINT ignored as a shell starts a background job
+    (a CI runner's, ``cmd &`` in a script): SIGINT must stop it all the same."""
     (home / "driver.ini").write_text(config)
     return subprocess.Popen(
         [
@@ -64,6 +70,7 @@ def _driver(home: Path, config: str) -> "subprocess.Popen[str]":
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=_ignoring_ctrl_c,
     )
 
 
