@@ -14,6 +14,7 @@ from onnx import helper, numpy_helper
 
 from fixtures.ct2_whisper_model import LAYERS, VOCABULARY, WIDTH, write_whisper_directory
 from speech_event.exporters.faster_whisper import read_faster_whisper
+from speech_event.exporters.quantize import quantize_directory
 from speech_event.exporters.whisper_graphs import (
     TIED_EMBEDDING,
     decoder_graph,
@@ -140,3 +141,33 @@ def test_the_written_files_pass_onnxs_checker(weights: WhisperWeights, tmp_path:
     for name, model in (("encoder.onnx", encoder_graph(weights)), ("decoder.onnx", decoder_graph(weights))):
         onnx.save(model, str(tmp_path / name))
         onnx.checker.check_model(str(tmp_path / name), full_check=True)
+
+
+def test_the_int8_decoder_holds_the_token_embedding_once_in_int8_and_gathers_its_rows_exactly(
+    weights: WhisperWeights, cross: Dict[str, np.ndarray], tmp_path: Path
+) -> None:
+    """The int8 file's lookup reads the int8 table the logits' product reads, and dequantizes the
+    rows it took: the same logits as a lookup of the whole table dequantized, without its fp32 copy."""
+    onnx.save(decoder_graph(weights), str(tmp_path / "decoder.onnx"))
+    (int8_path,) = quantize_directory(tmp_path)
+    int8 = onnx.load(str(int8_path))
+    table = TIED_EMBEDDING + "_quantized"
+    assert _embeddings(int8) == [table]
+    tensors = {tensor.name: numpy_helper.to_array(tensor) for tensor in int8.graph.initializer}
+    assert tensors[table].dtype == np.int8
+    readers = sorted(node.op_type for node in int8.graph.node if table in node.input)
+    assert readers == ["Gather", "MatMulInteger"]
+    # the reference: the whole table dequantized as DequantizeLinear does, gathered in fp32
+    reference = onnx.ModelProto()
+    reference.CopyFrom(int8)
+    graph = reference.graph
+    dequantized = (tensors[table].astype(np.int32) - int(tensors[TIED_EMBEDDING + "_zero_point"])).astype(
+        np.float32
+    ) * tensors[TIED_EMBEDDING + "_scale"]
+    graph.initializer.append(numpy_helper.from_array(dequantized, "dequantized"))
+    (index,) = [i for i, node in enumerate(graph.node) if node.op_type == "DequantizeLinear"]
+    rows = graph.node[index].output[0]
+    del graph.node[index]
+    lookup = next(node for node in graph.node if node.op_type == "Gather" and node.input[0] == table)
+    lookup.input[0], lookup.output[0] = "dequantized", rows
+    np.testing.assert_array_equal(_logits(int8, cross, [TOKENS]), _logits(reference, cross, [TOKENS]))
