@@ -15,10 +15,11 @@ from harness.catalog import RECOGNIZERS, VOICES
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome
 from harness.processes import ReplayError
+from harness.real_time_runner import run_in_real_time
 from harness.replay_storage import replay_storage
 from harness.report import passed, report
-from harness.ros.schedule import TEXT_DEADLINE
 from harness.scenario import Say, Scenario, ScenarioError, load_scenario
+from harness.schedule import TEXT_DEADLINE
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.application import stop_on_ctrl_c
@@ -59,6 +60,8 @@ def _base_config(path: Optional[str]) -> SpeechEventConfig:
 
 def _replays(arguments: argparse.Namespace, stack: ExitStack) -> Callable[[Scenario], Outcome]:
     """How to play one scenario on the chosen transport."""
+    if arguments.transport == "memory" and arguments.real_time:
+        return lambda scenario: run_in_real_time(scenario, arguments.text_deadline)
     if arguments.transport == "memory":
         return run_in_memory
     from harness.ros.runner import RosOptions, RosReplay  # needs rospy: only for --transport ros
@@ -81,12 +84,9 @@ SIM_TIME_HINT = (
 
 
 def _run(arguments: argparse.Namespace) -> int:
-    if arguments.transport == "memory" and (
-        arguments.real_time or arguments.node_command or arguments.config_dir
-    ):
+    if arguments.transport == "memory" and (arguments.node_command or arguments.config_dir):
         raise ScenarioError(
-            "--real-time, --node-command and --config-dir need --transport ros: in memory the node under "
-            "test is ours, on a fake clock"
+            "--node-command and --config-dir need --transport ros: in memory the node under test is ours"
         )
     base = _base_config(arguments.config)
     hint = SIM_TIME_HINT if arguments.transport == "ros" and not arguments.real_time else None
@@ -182,7 +182,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     run.add_argument("files", nargs="+", metavar="FILE.toml")
     run.add_argument("--transport", choices=["memory", "ros"], default="memory")
     run.add_argument(
-        "--real-time", action="store_true", help="ros: play on the wall clock instead of driving /clock"
+        "--real-time",
+        action="store_true",
+        help="play on the wall clock (in memory: instead of the fake clock; ros: instead of driving /clock)",
     )
     run.add_argument(
         "--node-command",
@@ -199,7 +201,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         type=_positive_seconds,
         default=TEXT_DEADLINE,
         metavar="SECONDS",
-        help="ros: wait at most this long for each text the node is expected to publish "
+        help="real time or ros: wait at most this long for each text the node is expected to publish "
         f"(default {TEXT_DEADLINE:.0f})",
     )
     run.set_defaults(handler=_run)

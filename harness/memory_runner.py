@@ -1,4 +1,5 @@
-"""Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic."""
+"""Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic
+(harness/real_time_runner.py plays it there on the wall clock)."""
 
 from typing import Callable, List, Optional
 
@@ -38,7 +39,7 @@ class _NodeClock:
         return self._clock.call_at(when, fire)
 
 
-class _SoundDetection:
+class SoundDetectionOnTheBus:
     """soundDetection on the in-memory bus: a publisher there, shut down, crashed and back."""
 
     def __init__(self, bus: InMemoryBus) -> None:
@@ -126,7 +127,7 @@ def run_in_memory(
     timeline = build_timeline(scenario)
     clock = clock or FakeClock()
     runner = _InMemory(bus or InMemoryBus(), clock)
-    sound_detection = _SoundDetection(runner.bus)
+    sound_detection = SoundDetectionOnTheBus(runner.bus)
     node_clock = _NodeClock(clock, runner.outcome.node_timers)
     executor = ClockExecutor(node_clock, recognition_seconds)
     with ScenarioEngines(scenario.recognizer, scenario.config, simulated=True) as engines:

@@ -7,7 +7,7 @@ made), and after each clock step it gives the node's timers time to run. ``real_
 wall clock instead. Every process it starts is stopped again, also on failure or Ctrl-C.
 
 The walk over the timeline is the in-memory runner's (harness/player.py); where the clock stops
-besides the events, and what is waited for there, comes from harness/ros/schedule.py, and
+besides the events, and what is waited for there, comes from harness/schedule.py, and
 soundDetection is harness/ros/stand_in.py's processes.
 """
 
@@ -38,9 +38,9 @@ from harness.catalog import engine_for
 from harness.outcome import REAL_TIME, SIM_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
-from harness.ros.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, Schedule, scenario_start
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
+from harness.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, Schedule, scenario_start
 from harness.timeline import SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros

@@ -1,5 +1,5 @@
 """The one walk over a timeline (harness/player.py), and the node's own times the in-memory run notes
-for the ROS replay's schedule (harness/ros/schedule.py), and what a replay waits for there."""
+for the ROS replay's schedule (harness/schedule.py), and what a replay waits for there."""
 
 from typing import List
 
@@ -7,8 +7,8 @@ from harness.memory_runner import run_in_memory
 from harness.outcome import SIM_TIME, Outcome, Published
 from harness.player import play
 from harness.report import report
-from harness.ros.schedule import Due, Schedule
 from harness.scenario import Say, Scenario, Silence
+from harness.schedule import Due, Schedule
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.services import SET_ENABLED_SERVICE

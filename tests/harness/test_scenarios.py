@@ -239,16 +239,13 @@ def test_the_demo_with_the_tones_voice_and_the_fake_recognizer() -> None:
     ]
 
 
-@pytest.mark.parametrize(
-    "option", [["--real-time"], ["--node-command", "other_node {config}"], ["--config-dir", "/tmp"]]
-)
+@pytest.mark.parametrize("option", [["--node-command", "other_node {config}"], ["--config-dir", "/tmp"]])
 def test_ros_only_options_are_refused_in_memory(option: List[str]) -> None:
     result = _harness("run", *option, "scenarios/single_utterance.toml")
     assert result.returncode == 2
     assert result.stdout == ""
     assert result.stderr == (
-        "error: --real-time, --node-command and --config-dir need --transport ros: in memory the node under "
-        "test is ours, on a fake clock\n"
+        "error: --node-command and --config-dir need --transport ros: in memory the node under test is ours\n"
     )
 
 

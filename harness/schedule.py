@@ -1,5 +1,6 @@
-"""When a ROS replay stops its clock, and what it waits for there: what our node did when the same
-scenario played in memory (harness/memory_runner.py), which is never what is compared.
+"""When a replay on a real clock (ROS, or the wall clock in memory) stops its clock, and what it
+waits for there: what our node did when the same scenario played in memory
+(harness/memory_runner.py), which is never what is compared.
 
 The node's own rules say when it acts by itself (a health check, the end of an utterance after a
 pause, an early pause or a length cut, a goal's deadline or feedback, a speculation gap): in

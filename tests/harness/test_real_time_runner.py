@@ -1,0 +1,52 @@
+"""The in-memory replay on the wall clock (harness/real_time_runner.py): what it collects, and a
+text that never comes failing the scenario with how long it was waited for. Every scenario played
+so beside a busy core: tests/real/test_scenarios_in_real_time.py."""
+
+import pytest
+
+from harness.outcome import REAL_TIME
+from harness.real_time_runner import run_in_real_time
+from harness.report import passed, report
+from harness.scenario import parse_scenario
+from harness.schedule import Schedule
+from speech_event.config import SpeechEventConfig
+from speech_event.pipeline.publication import Publication
+
+# Two commands, two seconds apart, and a recognise_speech goal for the second.
+SCENARIO = {
+    "name": "two commands",
+    "steps": [{"say": "go left"}, {"silence": 2.0}, {"listen": 5.0}, {"say": "stop"}],
+    "expect": {"published": ["go left", "stop"], "results": ["stop"]},
+}
+
+
+def test_the_texts_and_results_come_on_the_scenario_clock_after_their_speech() -> None:
+    scenario = parse_scenario(SCENARIO, "two.toml", SpeechEventConfig())
+    outcome = run_in_real_time(scenario)
+    assert outcome.clock == REAL_TIME
+    assert [message.text for message in outcome.published] == ["go left", "stop"]
+    assert [result.text for result in outcome.results] == ["stop"]
+    assert outcome.partials == [] and outcome.gave_up == []
+    # each text after its utterance's pause (1.5 s) and no later than the deadline allows
+    first, second = (message.time for message in outcome.published)
+    assert 1.5 < first < second and passed(scenario, outcome)
+
+
+def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_it_was_waited_for(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    scenario = parse_scenario(
+        {"name": "one", "steps": [{"say": "go left"}], "expect": {"published": ["go left"]}},
+        "one.toml",
+        SpeechEventConfig(),
+    )
+    rehearsal = Schedule.of(scenario)  # in memory, both texts come
+    monkeypatch.setattr(Schedule, "of", lambda scenario: rehearsal)
+    monkeypatch.setattr(Publication, "conclude", lambda self, job, outcome: None)  # now it publishes nothing
+    outcome = run_in_real_time(scenario, text_deadline=0.5)
+    assert outcome.published == [] and not passed(scenario, outcome)
+    (gave_up,) = outcome.gave_up
+    assert gave_up.startswith("at t=") and gave_up.endswith(
+        " s, waited 0.5 s for 1 text(s) that the node published by then in memory"
+    ), gave_up
+    assert "      gave up: " + gave_up in report(scenario, outcome)
