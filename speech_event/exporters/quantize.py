@@ -5,8 +5,9 @@
 Dynamic quantization (onnxruntime's quantizer): the weights of the matrix products become int8,
 activations are quantized as each product runs, so no calibration audio is needed. Only MatMul is
 quantized: the matrix products hold most of these models' weights (a conformer's feed-forward and
-attention layers, Whisper's blocks), and the decoders' LSTM and embeddings stay exact. Products
-inside a control-flow node's branches are quantized too (optimum's merged Whisper decoder).
+attention layers, Whisper's blocks), and the decoders' LSTM and embeddings stay exact, but for a
+table a product reads too (below). Products inside a control-flow node's branches are quantized too
+(optimum's merged Whisper decoder).
 bench/asr.py measures what it gains and what it changes.
 
 A table that is both a product's weight and gathered from (Whisper's tied token embedding: the
