@@ -75,15 +75,9 @@ class _RealTime:
             return
         # partial texts are not collected: when one comes decides what it has heard
         due = dataclasses.replace(self._schedule.due(self._now, played), partials=0)
-        began = time.monotonic()
-        while due.missing(self.outcome) and time.monotonic() < began + self._text_deadline:
-            time.sleep(0.01)
-        missing = due.missing(self.outcome)
-        if missing:
-            self.outcome.gave_up.append(
-                f"at t={self._scenario_time():.3f} s, waited {time.monotonic() - began:.1f} s for "
-                f"{missing} that the node published by then in memory"
-            )
+        gave_up = due.wait(self.outcome, self._text_deadline, self._scenario_time)
+        if gave_up:
+            self.outcome.gave_up.append(gave_up)
 
     def call(self, service: str, request: object) -> None:
         self.outcome.responses.append(int(self.bus.call(service, request).response))  # type: ignore[attr-defined]

@@ -9,8 +9,9 @@ fires on ROS at the time it fires in memory, before the events that come after i
 """
 
 import math
+import time
 from dataclasses import dataclass
-from typing import List
+from typing import Callable, List, Optional
 
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome, Published
@@ -76,6 +77,20 @@ class Due:
             (self.partials - len(observed.partials), "partial text(s)"),
         )
         return ", ".join(f"{count} {what}" for count, what in counts if count > 0)
+
+    def wait(self, observed: Outcome, patience: float, now: Callable[[], float]) -> Optional[str]:
+        """Wait until ``observed`` holds all of this, for at most ``patience`` seconds; None once it
+        does, else what was missing, when (``now``: the scenario clock) and how long it was awaited."""
+        began = time.monotonic()
+        while self.missing(observed) and time.monotonic() < began + patience:
+            time.sleep(0.002)
+        missing = self.missing(observed)
+        if not missing:
+            return None
+        return (
+            f"at t={now():.3f} s, waited {time.monotonic() - began:.1f} s for {missing} "
+            "that the node published by then in memory"
+        )
 
 
 def scenario_start(node_started: float, now: float, period: float) -> float:

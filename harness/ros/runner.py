@@ -202,21 +202,14 @@ class RosReplay:
         if self._options.real_time:  # when a partial comes decides what it says: not compared
             due = dataclasses.replace(due, partials=0)
         patience = TEXT_WAIT_AFTER_MISS if self._outcome.gave_up else self._options.text_deadline
-        began = time.monotonic()
-        while due.missing(self._outcome) and time.monotonic() < began + patience:
-            time.sleep(0.002)
-        missing = due.missing(self._outcome)
-        if missing:
-            waited = time.monotonic() - began
+        gave_up = due.wait(self._outcome, patience, self._scenario_time)
+        if gave_up:
             said = (
                 ""
                 if self._outcome.gave_up
                 else "; the node's last lines:\n" + self.processes.last_lines("node")
             )
-            self._outcome.gave_up.append(
-                f"at t={self._scenario_time():.3f} s, waited {waited:.1f} s for {missing} "
-                f"that the node published by then in memory{said}"
-            )
+            self._outcome.gave_up.append(gave_up + said)
 
     def call(self, service: str, request: object) -> None:
         ros_service = generated_class(SERVICES[service].name, "srv")
