@@ -27,7 +27,7 @@ def test_the_texts_and_results_come_on_the_scenario_clock_after_their_speech() -
     assert [message.text for message in outcome.published] == ["go left", "stop"]
     assert [result.text for result in outcome.results] == ["stop"]
     assert outcome.partials == [] and outcome.gave_up == []
-    # each text after its utterance's pause (1.5 s) and no later than the deadline allows
+    # each text after its utterance's pause (1.5 s), in their order
     first, second = (message.time for message in outcome.published)
     assert 1.5 < first < second and passed(scenario, outcome)
 
@@ -40,7 +40,7 @@ def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_it_was_waite
         "one.toml",
         SpeechEventConfig(),
     )
-    rehearsal = Schedule.of(scenario)  # in memory, both texts come
+    rehearsal = Schedule.of(scenario)  # in memory, its text comes
     monkeypatch.setattr(Schedule, "of", lambda scenario: rehearsal)
     monkeypatch.setattr(Publication, "conclude", lambda self, job, outcome: None)  # now it publishes nothing
     outcome = run_in_real_time(scenario, text_deadline=0.5)
