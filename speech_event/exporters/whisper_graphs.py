@@ -10,9 +10,14 @@ torch. What openai-whisper computes (its model.py), float32:
   blocks (causal self-attention over the cache and the new tokens, cross-attention, MLP), a final
   LayerNorm, and the logits: the output by the token embedding, transposed (tied weights).
 
-Attention scales the queries and keys by head width ** -0.25 each, as whisper does; here the
-scale is folded into their projections' weights. GELU is erf's (whisper's nn.GELU), written as
-torch.onnx writes it, a pattern onnxruntime fuses into one kernel.
+The decoder's attention scales the queries and keys by head width ** -0.25 each, as whisper does;
+here the scale is folded into their projections' weights. The encoder's self-attention is one
+onnxruntime MultiHeadAttention node (com.microsoft), which scales by head width ** -0.5 itself: its
+CPU kernel never holds a head's 1500 x 1500 scores twice, as MatMul, Softmax, MatMul do, and since
+onnxruntime 1.19 it attends in blocks (flash attention) and holds none. That was most of what an
+int8 tiny.en held at its peak besides its weights (bench/whisper_peer.py measures it). GELU is
+erf's (whisper's nn.GELU), written as torch.onnx writes it, a pattern onnxruntime fuses into one
+kernel.
 
 The token embedding is one initializer, stored transposed [width, vocabulary]: the logits' MatMul
 reads it as a weight (so the int8 version quantizes it), and the embedding of the tokens gathers
@@ -34,6 +39,9 @@ from speech_event.exporters.whisper_weights import Dense, Norm, WhisperWeights
 from speech_event.recognizers.whisper.model import cross_names
 
 OPSET = 17
+# onnxruntime's own operators: MultiHeadAttention, right on a CPU since onnxruntime 1.16 (1.15's
+# kernel gives other outputs for separate queries, keys and values: measured), hence pyproject's floor
+MICROSOFT_DOMAIN = "com.microsoft"
 # Every onnxruntime since 1.13 loads IR version 8 with opset 17; onnx.helper would write its own, newer one.
 IR_VERSION = 8
 TIED_EMBEDDING = "decoder.token_embedding.transposed"
@@ -54,6 +62,9 @@ class _Graph:
         self.epsilon = epsilon
         self.nodes: List[onnx.NodeProto] = []
         self.initializers: List[onnx.TensorProto] = []
+        # the types of values onnx's shape inference cannot know (the outputs of onnxruntime's own
+        # operators), which onnxruntime's quantizer needs of every product's input
+        self.value_info: List[onnx.ValueInfoProto] = []
         self._count = 0
 
     def weight(self, name: str, values: np.ndarray) -> str:
@@ -126,6 +137,18 @@ class _Graph:
         merged = self.op("Reshape", together, self.constant(np.array([1, 0, -1], np.int64)))
         return self.linear(merged, out, name)
 
+    def self_attention(self, x: str, qkv: Dense, out: Dense, heads: int, name: str) -> str:
+        """Attention of ``x`` [1, positions, width] to itself by onnxruntime's MultiHeadAttention, of
+        the fused projection's queries, keys and values, projected by ``out``."""
+        q, k, v = self.op_outputs("Split", [self.linear(x, qkv, f"{name}.qkv")], 3, axis=-1)
+        (attended,) = self.op_outputs(
+            "MultiHeadAttention", [q, k, v], 1, domain=MICROSOFT_DOMAIN, num_heads=heads
+        )
+        self.value_info.append(
+            helper.make_tensor_value_info(attended, TensorProto.FLOAT, [1, "positions", self.width])
+        )
+        return self.linear(attended, out, f"{name}.out")
+
     def mlp(self, x: str, norm: Norm, first: Dense, second: Dense, name: str) -> str:
         """x plus the MLP (Linear, GELU, Linear) of its norm."""
         hidden = self.gelu(self.linear(self.norm(x, norm, f"{name}.norm"), first, f"{name}.in"))
@@ -134,15 +157,20 @@ class _Graph:
     def model(
         self, name: str, inputs: List[Tuple[str, int, Shape]], outputs: List[Tuple[str, int, Shape]]
     ) -> onnx.ModelProto:
-        """The graph gathered, its inputs and outputs (name, element type, shape)."""
+        """The graph gathered, its inputs and outputs (name, element type, shape); onnxruntime's
+        operator set among its imports when a node uses it."""
         graph = helper.make_graph(
             self.nodes,
             name,
             [helper.make_tensor_value_info(*value) for value in inputs],
             [helper.make_tensor_value_info(*value) for value in outputs],
             self.initializers,
+            value_info=self.value_info,
         )
-        return helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], ir_version=IR_VERSION)
+        imports = [helper.make_opsetid("", OPSET)]
+        if any(node.domain == MICROSOFT_DOMAIN for node in self.nodes):
+            imports.append(helper.make_opsetid(MICROSOFT_DOMAIN, 1))
+        return helper.make_model(graph, opset_imports=imports, ir_version=IR_VERSION)
 
 
 def _cross_shapes(names: List[str], heads: int, head_width: int, audio: int) -> List[Tuple[str, int, Shape]]:
@@ -181,10 +209,7 @@ def encoder_graph(weights: WhisperWeights) -> onnx.ModelProto:
     for index, block in enumerate(weights.encoder_blocks):
         name = f"encoder.blocks.{index}"
         h = g.norm(x, block.attention_norm, f"{name}.attention.norm")
-        q, k, v = g.projected_heads(h, block.qkv, f"{name}.attention.qkv", heads, parts=3, scaled=2)
-        x = g.op(
-            "Add", x, g.attend(q, g.transposed(k), v, None, block.attention_out, f"{name}.attention.out")
-        )
+        x = g.op("Add", x, g.self_attention(h, block.qkv, block.attention_out, heads, f"{name}.attention"))
         x = g.mlp(x, block.mlp_norm, block.mlp_in, block.mlp_out, f"{name}.mlp")
     audio = g.norm(x, weights.encoder_norm, "encoder.norm")
     names = cross_names(len(weights.decoder_blocks))
