@@ -13,13 +13,17 @@ bench/asr.py measures what it gains and what it changes.
 A table that is both a product's weight and gathered from (Whisper's tied token embedding: the
 logits' weight and the tokens' lookup) is gathered from its int8 version too, then dequantized, so
 the file holds it once, in int8: the fp32 table was 80 of tiny.en's 109 MB int8 decoder, and 106 of
-base's 156 (bench/whisper_peer.py measures the memory it saves).
+base's 156 (bench/whisper_peer.py measures the memory it saves). An fp32 file's lookup of an exact
+float16 copy of the table (exporters/whisper_graphs.py says why) is made a lookup of the table
+itself first, so the int8 file holds neither copy.
 """
 
 import logging
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator, List
+
+import numpy as np
 
 from speech_event.recognizers.onnx.directory import INT8_SUFFIXES
 
@@ -60,16 +64,21 @@ def quantize_directory(directory: Path) -> List[Path]:
                 continue
             target = model.with_name(int8_name(model.name))
             partial = target.with_name(target.name + ".partial")
-            quantize_dynamic(
-                model,
-                partial,
-                op_types_to_quantize=["MatMul"],
-                weight_type=QuantType.QInt8,
-                # optimum's merged Whisper decoder keeps its every product by a weight inside its If
-                # node's two branches (with and without the cache), which the quantizer leaves
-                # alone unless told to go into them
-                extra_options={"EnableSubgraph": True},
-            )
+            source = _with_float32_lookups(model, target.with_name(target.name + ".source"))
+            try:
+                quantize_dynamic(
+                    source,
+                    partial,
+                    op_types_to_quantize=["MatMul"],
+                    weight_type=QuantType.QInt8,
+                    # optimum's merged Whisper decoder keeps its every product by a weight inside its
+                    # If node's two branches (with and without the cache), which the quantizer leaves
+                    # alone unless told to go into them
+                    extra_options={"EnableSubgraph": True},
+                )
+            finally:
+                if source != model:
+                    _remove(source)
             _gather_from_int8_tables(partial)
             os.replace(partial, target)
             written.append(target)
@@ -86,6 +95,67 @@ def _read(graph: "onnx.GraphProto") -> Iterator[str]:
         for attribute in node.attribute:
             for branch in [attribute.g] if attribute.HasField("g") else attribute.graphs:
                 yield from _read(branch)
+
+
+def lookups_from_float32_tables(model: "onnx.ModelProto") -> List[str]:
+    """Make every Gather of a float16 table whose rows are then cast to float32 read the float32
+    table of the same values instead, without the cast, and drop the float16 table when nothing
+    else reads it; the float16 tables so replaced. The quantizer then sees one table, which the
+    int8 file gathers from (gather_from_int8_tables)."""
+    from onnx import TensorProto, numpy_helper
+
+    graph = model.graph
+    tables = {
+        tensor.name: numpy_helper.to_array(tensor) for tensor in graph.initializer if len(tensor.dims) > 1
+    }
+    replaced = []
+    for gather in [node for node in graph.node if node.op_type == "Gather" and node.input[0] in tables]:
+        half = tables[gather.input[0]]
+        readers = [node for node in graph.node if gather.output[0] in node.input]
+        to_float = [TensorProto.FLOAT]
+        if half.dtype != np.float16 or len(readers) != 1 or readers[0].op_type != "Cast":
+            continue
+        if [attribute.i for attribute in readers[0].attribute if attribute.name == "to"] != to_float:
+            continue
+        table = next(
+            (
+                name
+                for name, values in tables.items()
+                if values.dtype == np.float32 and values.shape == half.shape and np.array_equal(values, half)
+            ),
+            None,
+        )
+        if table is None:
+            continue
+        replaced.append(gather.input[0])
+        gather.input[0], gather.output[0] = table, readers[0].output[0]
+        graph.node.remove(readers[0])
+    unread = set(replaced) - set(_read(graph))
+    for tensor in [tensor for tensor in graph.initializer if tensor.name in unread]:
+        graph.initializer.remove(tensor)
+    return sorted(replaced)
+
+
+def _with_float32_lookups(path: Path, rewritten: Path) -> Path:
+    """``path``, or where lookups_from_float32_tables changes it, that model written to ``rewritten``
+    (its weights in ``rewritten``.data beside it when it is that large: _remove removes both)."""
+    import onnx
+
+    from speech_event.exporters.whisper_graphs import save_graph
+
+    model = onnx.load(str(path))
+    if not lookups_from_float32_tables(model):
+        return path
+    save_graph(model, rewritten)
+    return rewritten
+
+
+def _remove(rewritten: Path) -> None:
+    from speech_event.exporters.whisper_graphs import EXTERNAL_DATA_SUFFIX
+
+    for file in (rewritten, rewritten.with_name(rewritten.name + EXTERNAL_DATA_SUFFIX)):
+        if file.exists():
+            file.unlink()
 
 
 def gather_from_int8_tables(model: "onnx.ModelProto") -> List[str]:

@@ -4,6 +4,7 @@ holding it twice (as torch.onnx writes it) brought to once with the same logits,
 decoder's cache giving what one pass over all the tokens gives, and the encoder's attention by
 onnxruntime's MultiHeadAttention computing whisper's."""
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Dict, List
 
@@ -17,6 +18,7 @@ from fixtures.ct2_whisper_model import LAYERS, VOCABULARY, WIDTH, write_whisper_
 from speech_event.exporters.faster_whisper import read_faster_whisper
 from speech_event.exporters.quantize import quantize_directory
 from speech_event.exporters.whisper_graphs import (
+    HALF_EMBEDDING,
     TIED_EMBEDDING,
     _Graph,
     decoder_graph,
@@ -35,6 +37,12 @@ TOKENS = [54, 61, 3, 30, 44, 7]  # sot, no timestamps, then text tokens
 def weights(tmp_path_factory: pytest.TempPathFactory) -> WhisperWeights:
     directory = write_whisper_directory(tmp_path_factory.mktemp("faster-whisper"))
     return read_faster_whisper(directory, {}).weights
+
+
+@pytest.fixture(scope="module")
+def float16_weights(weights: WhisperWeights) -> WhisperWeights:
+    """The weights with a token embedding float16 holds exactly, as a float16 model.bin's is."""
+    return replace(weights, embedding=weights.embedding.astype(np.float16).astype(np.float32))
 
 
 @pytest.fixture(scope="module")
@@ -98,6 +106,26 @@ def test_the_decoder_stores_the_token_embedding_once_and_the_logits_read_it(weig
     assert (logits.op_type, logits.input[1]) == ("MatMul", TIED_EMBEDDING)
 
 
+def test_a_token_embedding_float16_holds_is_gathered_from_a_float16_copy_with_the_same_logits(
+    float16_weights: WhisperWeights, cross: Dict[str, np.ndarray]
+) -> None:
+    """onnxruntime frees the float32 table once prepacked for the logits when no lookup reads it."""
+    model = decoder_graph(float16_weights)
+    assert _embeddings(model) == [TIED_EMBEDDING, HALF_EMBEDDING]
+    assert [node.op_type for node in model.graph.node if TIED_EMBEDDING in node.input] == ["MatMul"]
+    lookup = next(node for node in model.graph.node if HALF_EMBEDDING in node.input)
+    cast = next(node for node in model.graph.node if lookup.output[0] in node.input)
+    assert (lookup.op_type, cast.op_type) == ("Gather", "Cast")
+    float32_lookup = onnx.ModelProto()
+    float32_lookup.CopyFrom(model)
+    graph = float32_lookup.graph
+    graph.node.remove(next(node for node in graph.node if node.op_type == "Cast"))
+    next(node for node in graph.node if HALF_EMBEDDING in node.input).CopyFrom(
+        helper.make_node("Gather", [TIED_EMBEDDING, "tokens"], [cast.output[0]], axis=1)
+    )
+    np.testing.assert_array_equal(_logits(model, cross, [TOKENS]), _logits(float32_lookup, cross, [TOKENS]))
+
+
 def test_a_decoder_holding_the_embedding_twice_gets_it_once_with_the_same_logits(
     weights: WhisperWeights, cross: Dict[str, np.ndarray]
 ) -> None:
@@ -145,13 +173,16 @@ def test_the_written_files_pass_onnxs_checker(weights: WhisperWeights, tmp_path:
         onnx.checker.check_model(str(tmp_path / name), full_check=True)
 
 
+@pytest.mark.parametrize("embedding", ["weights", "float16_weights"])
 def test_the_int8_decoder_holds_the_token_embedding_once_in_int8_and_gathers_its_rows_exactly(
-    weights: WhisperWeights, cross: Dict[str, np.ndarray], tmp_path: Path
+    embedding: str, request: pytest.FixtureRequest, cross: Dict[str, np.ndarray], tmp_path: Path
 ) -> None:
     """The int8 file's lookup reads the int8 table the logits' product reads, and dequantizes the
-    rows it took: the same logits as a lookup of the whole table dequantized, without its fp32 copy."""
-    onnx.save(decoder_graph(weights), str(tmp_path / "decoder.onnx"))
+    rows it took: the same logits as a lookup of the whole table dequantized, without its fp32 copy
+    (nor the float16 one the fp32 file's lookup reads where float16 holds the table)."""
+    onnx.save(decoder_graph(request.getfixturevalue(embedding)), str(tmp_path / "decoder.onnx"))
     (int8_path,) = quantize_directory(tmp_path)
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["decoder.int8.onnx", "decoder.onnx"]
     int8 = onnx.load(str(int8_path))
     table = TIED_EMBEDDING + "_quantized"
     assert _embeddings(int8) == [table]
