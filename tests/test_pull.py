@@ -414,7 +414,14 @@ def test_a_faster_whisper_repository_is_converted_into_the_engines_directory(
         f"{directory}: a whisper model; its configuration lines:",
     ]
     # export-whisper's directory, and nothing of CTranslate2's: model.bin stays in the cache
-    written = ["config.json", "decoder.onnx", "encoder.onnx", "tokens.txt"]
+    written = [
+        "config.json",
+        "decoder.onnx",
+        "decoder.onnx.data",
+        "encoder.onnx",
+        "encoder.onnx.data",
+        "tokens.txt",
+    ]
     assert _listing(directory) == {name: (faster_whisper.exported / name).read_bytes() for name in written}
     assert [hub.downloads(name) for name in faster_whisper.files] == [1, 1, 1, 0, 0, 0]
     assert [path.name for path in (tmp_path / "models").iterdir()] == ["en"]
@@ -436,7 +443,14 @@ def test_int8_keeps_only_the_int8_graphs_of_a_faster_whisper_conversion(
         "someone/faster-whisper-base: converting to the Whisper engine's ONNX files and quantizing them to int8"
         in done.stderr.splitlines()
     )
-    written = ["config.json", "decoder.int8.onnx", "encoder.int8.onnx", "tokens.txt"]
+    written = [
+        "config.json",
+        "decoder.int8.onnx",
+        "decoder.int8.onnx.data",
+        "encoder.int8.onnx",
+        "encoder.int8.onnx.data",
+        "tokens.txt",
+    ]
     assert _listing(directory) == {name: (faster_whisper.exported / name).read_bytes() for name in written}
     # only int8 graphs: the engine runs them whatever quantization says
     audio = recordings.cards()[0].samples()

@@ -279,7 +279,8 @@ def export_faster_whisper(directory: Path, out_dir: Path, named: Dict[str, str])
     """Write the engine's directory for the faster-whisper model in ``directory`` to ``out_dir``."""
     model = read_faster_whisper(directory, named)
     try:
-        from speech_event.exporters.whisper_graphs import decoder_graph, encoder_graph, save_graph
+        from speech_event.exporters.graph_files import save_graph
+        from speech_event.exporters.whisper_graphs import decoder_graph, encoder_graph
     except ImportError:
         # not a dependency of the node: the robot runs the files, it does not write them
         raise ModelError(

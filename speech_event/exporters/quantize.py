@@ -25,6 +25,12 @@ from typing import TYPE_CHECKING, Iterator, List
 
 import numpy as np
 
+from speech_event.exporters.graph_files import (
+    EXTERNAL_DATA_SUFFIX,
+    has_weights_beside,
+    remove_graph,
+    save_graph,
+)
 from speech_event.recognizers.onnx.directory import INT8_SUFFIXES
 
 if TYPE_CHECKING:  # onnx comes with the export and pull extras, imported where it is used
@@ -78,9 +84,8 @@ def quantize_directory(directory: Path) -> List[Path]:
                 )
             finally:
                 if source != model:
-                    _remove(source)
-            _gather_from_int8_tables(partial)
-            os.replace(partial, target)
+                    remove_graph(source)
+            _finish(partial, target, has_weights_beside(model))
             written.append(target)
     finally:
         logging.getLogger().removeFilter(advice)
@@ -138,24 +143,14 @@ def lookups_from_float32_tables(model: "onnx.ModelProto") -> List[str]:
 
 def _with_float32_lookups(path: Path, rewritten: Path) -> Path:
     """``path``, or where lookups_from_float32_tables changes it, that model written to ``rewritten``
-    (its weights in ``rewritten``.data beside it when it is that large: _remove removes both)."""
+    (its weights beside it)."""
     import onnx
-
-    from speech_event.exporters.whisper_graphs import save_graph
 
     model = onnx.load(str(path))
     if not lookups_from_float32_tables(model):
         return path
     save_graph(model, rewritten)
     return rewritten
-
-
-def _remove(rewritten: Path) -> None:
-    from speech_event.exporters.whisper_graphs import EXTERNAL_DATA_SUFFIX
-
-    for file in (rewritten, rewritten.with_name(rewritten.name + EXTERNAL_DATA_SUFFIX)):
-        if file.exists():
-            file.unlink()
 
 
 def gather_from_int8_tables(model: "onnx.ModelProto") -> List[str]:
@@ -190,12 +185,19 @@ def gather_from_int8_tables(model: "onnx.ModelProto") -> List[str]:
     return sorted(changed)
 
 
-def _gather_from_int8_tables(path: Path) -> None:
+def _finish(partial: Path, target: Path, weights_beside: bool) -> None:
+    """The quantizer's ``partial`` file made ``target``: its tables gathered from in int8
+    (gather_from_int8_tables), its weights beside it where the fp32 file's are (what that saves
+    while loading: exporters/whisper_graphs.py). The graph is renamed last, whole."""
     import onnx
 
-    model = onnx.load(str(path))
-    if gather_from_int8_tables(model):
-        onnx.save(model, str(path))
+    model = onnx.load(str(partial))
+    gather_from_int8_tables(model)
+    if weights_beside:
+        save_graph(model, partial, target.name + EXTERNAL_DATA_SUFFIX)
+    else:
+        onnx.save(model, str(partial))
+    os.replace(partial, target)
 
 
 def quantize_and_say(directory: Path) -> None:

@@ -29,11 +29,9 @@ prepacks the logits' weight into a copy of its own and frees the table only when
 reads it, so a lookup of the float32 table kept it twice in memory (tiny.en's decoder loads in 161
 MiB instead of 215). The int8 quantizer gathers from the table again (exporters/quantize.py).
 
-An ONNX file is one protobuf message, which cannot pass 2 GiB: ``save_graph`` writes the weights of
-a larger graph (Whisper large's fp32 encoder and decoder, about 3.0 and 3.2 GB) to a file beside it.
+The graphs are saved with their weights in a file beside them (exporters/graph_files.py).
 """
 
-from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -51,10 +49,6 @@ MICROSOFT_DOMAIN = "com.microsoft"
 IR_VERSION = 8
 TIED_EMBEDDING = "decoder.token_embedding.transposed"
 HALF_EMBEDDING = TIED_EMBEDDING + ".float16"
-# A graph whose weights pass this many bytes is saved with them in a file of their own: protobuf's
-# 2 GiB limit on one message, less room for the nodes (under a megabyte for Whisper large)
-LARGEST_INLINE_WEIGHTS = 2**31 - 2**26
-EXTERNAL_DATA_SUFFIX = ".data"
 
 
 Shape = Sequence[Union[int, str]]
@@ -384,19 +378,3 @@ def share_transposed_embedding(model: onnx.ModelProto) -> int:
         graph.initializer.extend(kept)
         return int(transposed.nbytes)
     return 0
-
-
-def save_graph(model: onnx.ModelProto, path: Path) -> None:
-    """``model`` to ``path``: its weights inside it, or when they pass LARGEST_INLINE_WEIGHTS in
-    ``path``.data beside it (onnxruntime reads them from there, given the file's path)."""
-    weights = sum(len(tensor.raw_data) for tensor in model.graph.initializer)
-    if weights <= LARGEST_INLINE_WEIGHTS:
-        onnx.save(model, str(path))
-        return
-    onnx.save(
-        model,
-        str(path),
-        save_as_external_data=True,
-        all_tensors_to_one_file=True,
-        location=path.name + EXTERNAL_DATA_SUFFIX,
-    )

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from speech_event.errors import ModelError
 from speech_event.exporters.faster_whisper import export_faster_whisper, read_config
+from speech_event.exporters.graph_files import remove_graph
 from speech_event.exporters.quantize import quantize_directory
 from speech_event.recognizers.onnx.directory import MANIFEST_FILE
 from speech_event.recognizers.onnx.families import family_of
@@ -52,9 +53,7 @@ def convert(snapshot: Path, directory: Path, int8: bool) -> str:
     if int8:
         quantize_directory(directory)
         for graph in (ENCODER_FILE, DECODER_FILE):
-            # the fp32 graph, and the file of its weights that Whisper large's has beside it
-            for fp32 in directory.glob(f"{graph}*"):
-                fp32.unlink()
+            remove_graph(directory / graph)  # the fp32 graph and its weights
     # as the engine reads the directory
     load_whisper_manifest(directory / MANIFEST_FILE)
     load_tokens(directory / TOKENS_FILE)
