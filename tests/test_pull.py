@@ -27,6 +27,7 @@ import pytest
 from fixtures import recordings
 from fixtures.audio import noise, speak_tones
 from fixtures.ct2_whisper_model import (
+    EXPORTED_FILES,
     TEXT_POSITIONS,
     model_bin_bytes,
     tokenizer_json,
@@ -414,15 +415,9 @@ def test_a_faster_whisper_repository_is_converted_into_the_engines_directory(
         f"{directory}: a whisper model; its configuration lines:",
     ]
     # export-whisper's directory, and nothing of CTranslate2's: model.bin stays in the cache
-    written = [
-        "config.json",
-        "decoder.onnx",
-        "decoder.onnx.data",
-        "encoder.onnx",
-        "encoder.onnx.data",
-        "tokens.txt",
-    ]
-    assert _listing(directory) == {name: (faster_whisper.exported / name).read_bytes() for name in written}
+    assert _listing(directory) == {
+        name: (faster_whisper.exported / name).read_bytes() for name in EXPORTED_FILES
+    }
     assert [hub.downloads(name) for name in faster_whisper.files] == [1, 1, 1, 0, 0, 0]
     assert [path.name for path in (tmp_path / "models").iterdir()] == ["en"]
     audio = recordings.cards()[0].samples()
