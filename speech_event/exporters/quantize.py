@@ -110,23 +110,29 @@ def lookups_from_float32_tables(model: "onnx.ModelProto") -> List[str]:
     from onnx import TensorProto, numpy_helper
 
     graph = model.graph
-    tables = {
-        tensor.name: numpy_helper.to_array(tensor) for tensor in graph.initializer if len(tensor.dims) > 1
+    # only the float16 tables, and the float32 ones of their shape, are read as arrays: a model's
+    # every weight would be a copy of the whole model (Whisper large's fp32 decoder: 3.2 GB)
+    halves = {
+        tensor.name: tensor
+        for tensor in graph.initializer
+        if tensor.data_type == TensorProto.FLOAT16 and len(tensor.dims) > 1
     }
+    to_float = [TensorProto.FLOAT]
     replaced = []
-    for gather in [node for node in graph.node if node.op_type == "Gather" and node.input[0] in tables]:
-        half = tables[gather.input[0]]
+    for gather in [node for node in graph.node if node.op_type == "Gather" and node.input[0] in halves]:
         readers = [node for node in graph.node if gather.output[0] in node.input]
-        to_float = [TensorProto.FLOAT]
-        if half.dtype != np.float16 or len(readers) != 1 or readers[0].op_type != "Cast":
+        if len(readers) != 1 or readers[0].op_type != "Cast":
             continue
         if [attribute.i for attribute in readers[0].attribute if attribute.name == "to"] != to_float:
             continue
+        half = numpy_helper.to_array(halves[gather.input[0]])
         table = next(
             (
-                name
-                for name, values in tables.items()
-                if values.dtype == np.float32 and values.shape == half.shape and np.array_equal(values, half)
+                tensor.name
+                for tensor in graph.initializer
+                if tensor.data_type == TensorProto.FLOAT
+                and tuple(tensor.dims) == half.shape
+                and np.array_equal(numpy_helper.to_array(tensor), half)
             ),
             None,
         )
@@ -188,7 +194,7 @@ def gather_from_int8_tables(model: "onnx.ModelProto") -> List[str]:
 def _finish(partial: Path, target: Path, weights_beside: bool) -> None:
     """The quantizer's ``partial`` file made ``target``: its tables gathered from in int8
     (gather_from_int8_tables), its weights beside it where the fp32 file's are (what that saves
-    while loading: exporters/whisper_graphs.py). The graph is renamed last, whole."""
+    while loading: exporters/graph_files.py). The graph is renamed last, whole."""
     import onnx
 
     model = onnx.load(str(partial))
