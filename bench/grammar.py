@@ -25,6 +25,10 @@ Per engine and set: commands published exactly / rejected / as another command; 
 speech published as a phrase; the ratio the engine judged by (nats: the most likely phrase
 against the free decoding) as min / median / max for commands and for other speech; the
 nearest cases; and the decoding time per second of audio. Printed; nothing is asserted.
+
+``--record FILE`` writes each decision (for the neural engines the free decoding and every phrase's
+score); ``--replay FILE`` judges those again with today's rule, decoding nothing: how a change of
+the rule (onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
 """
 
 import argparse
@@ -53,6 +57,7 @@ from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Recognizer
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
+from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 from speech_event.topics import SIGNAL_TOPIC, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
 
@@ -171,29 +176,51 @@ def judge(run: NodeRun, samples: Sequence[Sample], record: Optional[TextIO] = No
         tally.busy += time.perf_counter() - began
         tally.seconds += audio.size / RATE
         published = "" if text == SPEECH_NOT_RECOGNIZED else text
-        ratio = ratio_of(run.engine)
         if record is not None:
             line = {"set": label, "expected": expected, "published": published, **decision(run.engine)}
             record.write(json.dumps(line) + "\n")
-        if expected is not None:
-            tally.in_count += 1
-            if ratio is not None:
-                tally.in_ratios.append(ratio)
-            if published == expected or (expected == "" and published):
-                tally.exact += 1
-            elif published:
-                tally.wrong += 1
-                tally.examples.append(f"said {expected!r}, published {published!r}")
-            else:
-                tally.rejected += 1
-        else:
-            tally.out_count += 1
-            if ratio is not None:
-                tally.out_ratios.append(ratio)
-            if published:
-                tally.published_out += 1
-                tally.examples.append(f"outside the grammar, published {published!r} ({ratio})")
+        count(tally, expected, published, ratio_of(run.engine))
     return tally
+
+
+def count(tally: Tally, expected: Optional[str], published: str, ratio: Optional[float]) -> None:
+    """One utterance's outcome in its set's tally."""
+    if expected is not None:
+        tally.in_count += 1
+        if ratio is not None:
+            tally.in_ratios.append(ratio)
+        if published == expected or (expected == "" and published):
+            tally.exact += 1
+        elif published:
+            tally.wrong += 1
+            tally.examples.append(f"said {expected!r}, published {published!r}")
+        else:
+            tally.rejected += 1
+    else:
+        tally.out_count += 1
+        if ratio is not None:
+            tally.out_ratios.append(ratio)
+        if published:
+            tally.published_out += 1
+            tally.examples.append(f"outside the grammar, published {published!r} ({ratio})")
+
+
+def replay(record: Path) -> None:
+    """Judge a --record run's neural decisions again with the rule of today's
+    onnx/grammar_choice.py: the free decoding and every phrase's score are what the engine computed
+    then, so a new rule is measured on the same figures without decoding again. pocketsphinx's
+    lines hold its ratio alone (a rejection names no phrase): they are left out."""
+    tallies: Dict[str, Tally] = {}
+    for line in record.read_text().splitlines():
+        decided = json.loads(line)
+        if "scores" not in decided:
+            continue
+        choice = GrammarChoice(decided["free"], decided["free_score"], decided["scores"])
+        published = choice.transcript(NEURAL_GRAMMAR_THRESHOLD).text
+        best = max(choice.phrase_scores, key=choice.phrase_scores.__getitem__)
+        count(tallies.setdefault(decided["set"], Tally()), decided["expected"], published, choice.ratio(best))
+    for label, tally in tallies.items():
+        report(label, tally)
 
 
 def spread(values: List[float]) -> str:
@@ -212,8 +239,8 @@ def report(name: str, tally: Tally) -> None:
         f"rejected {percent(tally.rejected, tally.in_count)}, "
         f"as another {percent(tally.wrong, tally.in_count)}; "
         f"other speech ({tally.out_count}) published {percent(tally.published_out, tally.out_count)}; "
-        f"ratio min/median/max: commands {spread(tally.in_ratios)}, other {spread(tally.out_ratios)}; "
-        f"{tally.busy / tally.seconds:.3f} s a second of audio"
+        f"ratio min/median/max: commands {spread(tally.in_ratios)}, other {spread(tally.out_ratios)}"
+        + (f"; {tally.busy / tally.seconds:.3f} s a second of audio" if tally.seconds else "")
     )
     for example in tally.examples:
         print(f"      {example}")
@@ -273,7 +300,13 @@ def main() -> None:
     parser.add_argument("--engines", nargs="+", choices=sorted(ENGINES), default=list(ENGINES))
     parser.add_argument("--voices", nargs="+", choices=sorted(VOICES), default=list(VOICES))
     parser.add_argument("--record", type=Path, help="write each utterance's decision here (JSON lines)")
+    parser.add_argument(
+        "--replay", type=Path, help="judge a --record file's decisions again; nothing is decoded"
+    )
     arguments = parser.parse_args()
+    if arguments.replay:
+        replay(arguments.replay)
+        return
     with contextlib.ExitStack() as stack:
         record = stack.enter_context(open(arguments.record, "w")) if arguments.record else None
         for name in arguments.engines:

@@ -195,6 +195,24 @@ def test_only_a_phrase_of_two_words_or_more_with_one_word_heard_otherwise_is_tak
     assert GrammarChoice(" Stops.", -8.5, scores).transcript(-5.0) == Transcript("", rejected="stop")
 
 
+def test_a_phrase_of_two_words_or_more_whose_sound_the_free_text_has_is_taken_within_the_threshold() -> None:
+    """Issue 32: festival's ked voice, trained Whisper: "play some music" written "Place a music",
+    "tell me a joke" "Tell me, Joke." (the ratios as measured, +0.3 and +2.0 nats)."""
+    scores = {"play some music": -9.2, "tell me a joke": -6.0, "thank you": -3.0, "dance": -4.0, "stop": -9.0}
+    assert GrammarChoice(" Place a music", -9.5, scores).transcript(-5.0) == Transcript("play some music")
+    assert GrammarChoice(" Tell me, Joke.", -8.0, scores).transcript(-5.0, 0.8) == Transcript(
+        "tell me a joke", 0.8
+    )
+    # the same words, the phrase far less likely than the free text: rejected
+    assert GrammarChoice(" Place a music", -3.0, scores).transcript(-5.0) == Transcript(
+        "", rejected="thank you"
+    )
+    # a third of the phones changed ("no thanks" heard as "Thanks."): rejected however likely
+    assert GrammarChoice(" Thanks.", -3.5, scores).transcript(-5.0) == Transcript("", rejected="thank you")
+    # a one-word phrase sounding alike is another word ("Dan's." for "dance"): rejected
+    assert GrammarChoice(" Dan's.", -4.2, scores).transcript(-5.0) == Transcript("", rejected="thank you")
+
+
 def test_of_several_phrases_one_word_away_the_most_likely_is_taken() -> None:
     scores = {"turn on the light": -14.0, "turn off the light": -13.0}
     assert GrammarChoice(" Turn up the light.", -12.0, scores).transcript(-5.0) == Transcript(
