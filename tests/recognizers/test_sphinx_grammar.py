@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from fixtures import recordings
+from fixtures.festival import festival_voice
 from fixtures.tts import speak_tts
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import Grammar, jsgf_grammar, load_grammar, phrases_grammar, requested_grammar
@@ -67,9 +68,9 @@ def test_every_robot_command_in_the_tts_voice_is_published(commands: SphinxRecog
         ("bring me the red book", "bring me the red cup"),
         ("open the box", "open the door"),
         ("dance with me", "dance"),
-        ("the kitchen is dirty", "look at me"),
-        ("please open the window", "be quiet"),
-        ("turn left at the corner", "turn off the light"),
+        ("the kitchen is dirty", "what is your name"),
+        ("please open the window", "open the door"),
+        ("turn left at the corner", "open the door"),
     ],
 )
 def test_a_near_miss_is_rejected_naming_the_nearest_command(
@@ -78,9 +79,25 @@ def test_a_near_miss_is_rejected_naming_the_nearest_command(
     assert commands.transcribe(speak_tts(sentence, 16000)) == Transcript("", rejected=nearest)
 
 
+@pytest.mark.parametrize(
+    ("voice", "said", "published"),
+    [
+        # pruned within its first word by pocketsphinx's default beams: "thank you", 381 nats less likely
+        ("slt", "come here", Transcript("come here")),
+        ("kal", "come here", Transcript("come here")),  # -95 nats: within the default threshold
+        ("kal", "bring me the red book", Transcript("", rejected="bring me the red cup")),  # -106: beyond it
+    ],
+)
+def test_in_festivals_voices_commands_are_published_and_a_near_miss_is_not(
+    commands: SphinxRecognizer, voice: str, said: str, published: Transcript
+) -> None:
+    """Issue 32: the grammars' wider beams and the default threshold, -100 nats (sphinx.py)."""
+    assert commands.transcribe(festival_voice(voice)(said, 16000)) == published
+
+
 def test_speech_reaching_no_whole_phrase_names_the_partial_path(commands: SphinxRecognizer) -> None:
-    # No path of "don't stop" reaches the grammar's end: nothing judged, the partial path named.
-    assert commands.transcribe(speak_tts("don't stop", 16000)) == Transcript("", rejected="go to")
+    # No path of "go to" reaches the grammar's end: nothing judged, the partial path named.
+    assert commands.transcribe(speak_tts("go to", 16000)) == Transcript("", rejected="go to")
     assert commands.last_ratio is None
 
 
@@ -107,7 +124,7 @@ def test_the_threshold_is_honoured() -> None:
 
 def test_without_rejection_the_nearest_phrase_is_published_as_pocketsphinx_finds_it() -> None:
     recognizer = SphinxRecognizer(load_grammar(COMMANDS), grammar_threshold=-float("inf"))
-    assert recognizer.transcribe(speak_tts("please open the window", 16000)) == Transcript("be quiet")
+    assert recognizer.transcribe(speak_tts("please open the window", 16000)) == Transcript("open the door")
     assert recognizer.last_ratio is None
 
 
