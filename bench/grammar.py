@@ -120,10 +120,13 @@ def ratio_of(engine: Recognizer) -> Optional[float]:
     against the free decoding), when it judged one."""
     if isinstance(engine, (NemoRecognizer, WhisperRecognizer)):
         choice = engine.last_choice
-        if choice is None:
-            return None
-        return choice.ratio(max(choice.phrase_scores, key=choice.phrase_scores.__getitem__))
+        return None if choice is None else best_ratio(choice)
     return engine.last_ratio if isinstance(engine, JudgedByRatio) else None
+
+
+def best_ratio(choice: GrammarChoice) -> float:
+    """The ratio of a neural decision's most likely phrase against its free decoding."""
+    return choice.ratio(max(choice.phrase_scores, key=choice.phrase_scores.__getitem__))
 
 
 class NodeRun:
@@ -217,8 +220,7 @@ def replay(record: Path) -> None:
             continue
         choice = GrammarChoice(decided["free"], decided["free_score"], decided["scores"])
         published = choice.transcript(NEURAL_GRAMMAR_THRESHOLD).text
-        best = max(choice.phrase_scores, key=choice.phrase_scores.__getitem__)
-        count(tallies.setdefault(decided["set"], Tally()), decided["expected"], published, choice.ratio(best))
+        count(tallies.setdefault(decided["set"], Tally()), decided["expected"], published, best_ratio(choice))
     for label, tally in tallies.items():
         report(label, tally)
 

@@ -105,7 +105,7 @@ class GrammarChoice:
         misheard = [
             phrase
             for phrase in self.phrase_scores
-            if self.ratio(phrase) >= threshold and len(phrase.split()) >= 2 and heard_as(said, phrase)
+            if self.ratio(phrase) >= threshold and heard_as(said, phrase)
         ]
         if misheard:
             return Transcript(max(misheard, key=self.phrase_scores.__getitem__), confidence)
@@ -113,8 +113,9 @@ class GrammarChoice:
 
 
 def heard_as(heard: str, phrase: str) -> bool:
-    """Whether ``heard`` is ``phrase`` misheard: one word changed, or sounding alike."""
-    return one_word_changed(heard, phrase) or sounds_alike(heard, phrase)
+    """Whether ``heard`` is ``phrase`` (two words or more) misheard: one word changed, or sounding
+    alike. A one-word phrase heard otherwise is another word."""
+    return len(phrase.split()) >= 2 and (one_word_changed(heard, phrase) or sounds_alike(heard, phrase))
 
 
 def one_word_changed(heard: str, phrase: str) -> bool:

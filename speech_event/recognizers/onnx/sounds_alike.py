@@ -33,10 +33,11 @@ def sounds_alike(heard: str, phrase: str, share: float = SOUND_ALIKE_SHARE) -> b
     changed, added or dropped, its first and last phones kept (both spelt as a grammar spells them:
     lower case, words of a-z and '). The ends: a near miss says more before or after a command
     ("go to the kitchen now": 2 phones more than 11), a command misheard keeps its edges."""
+    heard_ways = pronunciations(heard)  # once, not again for each of the phrase's
     return any(
         said[0] == way[0] and said[-1] == way[-1] and phone_edits(way, said) <= share * len(way)
         for way in pronunciations(phrase)
-        for said in pronunciations(heard)
+        for said in heard_ways
     )
 
 
