@@ -2,15 +2,16 @@
 log P(its tokens, then eot | prompt, audio), by Whisper's decoding rules as ``whisper_greedy``
 applies them, so that it compares with the score of the model's own greedy text (``WhisperResult``).
 
-The prompt's decoder pass is shared: it runs once, then each phrase's tokens run in one decoder
-call from a fork of the prompt's key/value cache.
+A phrase's forms are tokenized as Whisper's tokenizer does (tokenizer.py): the
+model gives the same text in other tokens far less probability. The prompt's decoder pass is
+shared: it runs once, then each phrase's tokens run in one decoder call from a fork of the
+prompt's key/value cache.
 """
 
-from typing import Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence
 
 import numpy as np
 
-from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.hypothesis import log_softmax
 from speech_event.recognizers.whisper.greedy import whisper_logits
 from speech_event.recognizers.whisper.manifest import WhisperManifest
@@ -27,35 +28,6 @@ def phrase_variants(phrase: str) -> List[str]:
         raise ValueError(f"the phrase {phrase!r} has no words")
     forms = [f" {first}{stem[1:]}{end}" for first in (stem[0].lower(), stem[0].upper()) for end in ("", ".")]
     return list(dict.fromkeys(forms))
-
-
-def phrase_tokens(text: str, pieces: Sequence[bytes], text_tokens: int) -> List[int]:
-    """``text``'s UTF-8 bytes as tokens, the longest piece that matches taken from the left, among
-    the text tokens only (ids below ``text_tokens``: a model's first special token, Whisper's eot),
-    so that no special token is ever spelt. Whisper's byte-level BPE tokenizes by its merges, which
-    an exported directory does not hold: longest match is an approximation that is often, not
-    always, the canonical tokenization, and the model gives a non-canonical one less probability.
-    ModelError names the text and where no piece matches."""
-    ids: Dict[bytes, int] = {}
-    for token, piece in enumerate(pieces[:text_tokens]):
-        if piece:
-            ids.setdefault(piece, token)
-    longest = max(map(len, ids), default=0)
-    data = text.encode("utf-8")
-    tokens: List[int] = []
-    start = 0
-    while start < len(data):
-        end = next(
-            (end for end in range(min(len(data), start + longest), start, -1) if data[start:end] in ids),
-            None,
-        )
-        if end is None:
-            raise ModelError(
-                f"the model's text tokens cannot spell {text!r}: none matches its UTF-8 from {data[start:]!r}"
-            )
-        tokens.append(ids[data[start:end]])
-        start = end
-    return tokens
 
 
 def forced_log_likelihood(logits: np.ndarray, tokens: Sequence[int], manifest: WhisperManifest) -> float:

@@ -7,8 +7,9 @@ the robot's node reports it. A language with no token in the model directory's c
 has none for Kinyarwanda) is refused when the engine is built.
 
 With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing in
-the forms Whisper writes it (forced.py), the answer chosen as onnx/grammar_choice.py says. A
-command fits in Whisper's 30 s window: only the first piece is decoded then.
+the forms Whisper writes it, in the tokens Whisper's tokenizer gives them (forced.py,
+tokenizer.py), the answer chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s
+window: only the first piece is decoded then.
 """
 
 from pathlib import Path
@@ -25,10 +26,11 @@ from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_
 from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
-from speech_event.recognizers.whisper.forced import phrase_tokens, phrase_variants, score_phrases
+from speech_event.recognizers.whisper.forced import phrase_variants, score_phrases
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
+from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10
@@ -74,6 +76,7 @@ class WhisperRecognizer:
                 f"with one, naming it: speech-event export-whisper CHECKPOINT DIR --language {language}=CODE"
             )
         self._prompt = self._manifest.prompt(language)
+        self._tokenizer = WhisperTokenizer(self._pieces, self._manifest.eot)
         if len(self._pieces) != self._manifest.vocabulary_size or self._model.vocabulary_size not in (
             None,
             self._manifest.vocabulary_size,
@@ -107,7 +110,7 @@ class WhisperRecognizer:
             forms = []
             for variant in phrase_variants(phrase):
                 try:
-                    forms.append(phrase_tokens(variant, self._pieces, self._manifest.eot))
+                    forms.append(self._tokenizer.encode(variant))
                 except ModelError:
                     continue  # a form the model cannot spell (a tokenizer without capitals)
             if not forms:

@@ -15,7 +15,6 @@ from onnx import helper
 from fixtures.audio import speak_tones
 from fixtures.transducer_model import tensor
 from fixtures.whisper_tones_model import (
-    EOT,
     MANIFEST,
     NO_SPEECH,
     PIECES,
@@ -26,17 +25,12 @@ from fixtures.whisper_tones_model import (
     decoder_model,
     whisper_tones_model_directory,
 )
-from speech_event.errors import ModelError
 from speech_event.recognizers.whisper.features import whisper_log_mel
-from speech_event.recognizers.whisper.forced import (
-    forced_log_likelihood,
-    phrase_tokens,
-    phrase_variants,
-    score_phrases,
-)
+from speech_event.recognizers.whisper.forced import forced_log_likelihood, phrase_variants, score_phrases
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.model import DECODER_FILE, DecoderSession, WhisperModel
+from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 
 RATE = 16000
 PROMPT = MANIFEST.prompt("english")
@@ -44,7 +38,7 @@ TOKENS = load_tokens(whisper_tones_model_directory() / "tokens.txt")
 
 
 def _tokens(text: str) -> List[int]:
-    return phrase_tokens(text, TOKENS, MANIFEST.eot)
+    return WhisperTokenizer(TOKENS, MANIFEST.eot).encode(text)
 
 
 @pytest.fixture(scope="module")
@@ -205,28 +199,3 @@ def test_phrase_variants_are_whispers_surface_forms() -> None:
     assert phrase_variants("42") == [" 42", " 42."]  # no capital: no duplicates
     with pytest.raises(ValueError):
         phrase_variants(" . ")
-
-
-def test_phrase_tokens_take_the_longest_text_piece_and_name_a_text_they_cannot_spell() -> None:
-    pieces = [b" g", b"o", b" go", b" left", b"le", b"ft", b"x", b"<|endoftext|>", b" go"]
-    assert phrase_tokens(" go left", pieces, 7) == [2, 3]
-    assert phrase_tokens(" golex", pieces, 7) == [2, 4, 6]
-    assert phrase_tokens(" go", pieces, 9) == [2]  # a duplicate piece: the first id
-    for text in (" go left", " go to the kitchen", " don't stop"):
-        assert text_of(_tokens(text), TOKENS, TIMESTAMP_BEGIN) == text
-    assert all(token < EOT for token in _tokens(" go to the kitchen"))
-    with pytest.raises(ModelError) as error:
-        phrase_tokens("<|endoftext|>", pieces, 7)  # the special token is not a text token
-    assert str(error.value) == (
-        "the model's text tokens cannot spell '<|endoftext|>': none matches its UTF-8 from b'<|endoftext|>'"
-    )
-    with pytest.raises(ModelError) as error:
-        phrase_tokens(" go l\u00e9ft", pieces, 7)
-    assert str(error.value) == (
-        "the model's text tokens cannot spell ' go l\u00e9ft': none matches its UTF-8 from b' l\\xc3\\xa9ft'"
-    )
-    with pytest.raises(ModelError) as error:
-        _tokens(" Go left.")  # the tones model has no capitals: that variant is not its to write
-    assert str(error.value) == (
-        "the model's text tokens cannot spell ' Go left.': none matches its UTF-8 from b' Go left.'"
-    )

@@ -20,7 +20,7 @@ from speech_event.errors import ModelError
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.onnx.families import family_of
 from speech_event.recognizers.whisper.features import whisper_log_mel
-from speech_event.recognizers.whisper.forced import phrase_tokens, score_phrases
+from speech_event.recognizers.whisper.forced import score_phrases
 from speech_event.recognizers.whisper.model import WhisperModel
 from speech_event.recognizers.whisper.optimum_layout import (
     gpt2_byte_decoder,
@@ -29,6 +29,7 @@ from speech_event.recognizers.whisper.optimum_layout import (
 )
 from speech_event.recognizers.whisper.optimum_model import OptimumWhisperModel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 
 RATE = 16000
 SAID = ["go left", "stop", "go to the kitchen", "yego", ""]
@@ -93,9 +94,8 @@ def test_the_merged_decoder_step_by_step_gives_the_export_decoders_logits() -> N
 def test_phrases_forced_one_token_a_step_score_as_on_the_export() -> None:
     mel = whisper_log_mel(speak_tones("go left", RATE), MANIFEST.mel_bands)
     prompt = MANIFEST.prompt("english")
-    phrases = [
-        phrase_tokens(text, PIECES, MANIFEST.eot) for text in (" go left", " go", " stop", " go lefts")
-    ]
+    tokenizer = WhisperTokenizer(PIECES, MANIFEST.eot)
+    phrases = [tokenizer.encode(text) for text in (" go left", " go", " stop", " go lefts")]
     optimum = score_phrases(
         OptimumWhisperModel(whisper_tones_optimum_directory()).decoding(mel), prompt, phrases, MANIFEST
     )
