@@ -2,7 +2,7 @@
 log P(its tokens, then eot | prompt, audio), by Whisper's decoding rules as ``whisper_greedy``
 applies them, so that it compares with the score of the model's own greedy text (``WhisperResult``).
 
-A phrase's forms are tokenized as Whisper's tokenizer does (tokenizer.py): the
+A phrase's forms (written_forms.py) are tokenized as Whisper's tokenizer does (tokenizer.py): the
 model gives the same text in other tokens far less probability. The prompt's decoder pass is
 shared: it runs once, then each phrase's tokens run in one decoder call from a fork of the
 prompt's key/value cache.
@@ -16,18 +16,6 @@ from speech_event.recognizers.onnx.hypothesis import log_softmax
 from speech_event.recognizers.whisper.greedy import whisper_logits
 from speech_event.recognizers.whisper.manifest import WhisperManifest
 from speech_event.recognizers.whisper.model import Decoding
-
-
-def phrase_variants(phrase: str) -> List[str]:
-    """The texts Whisper may write a phrase as, to score each: after a leading space (Whisper's text
-    starts with one), the first letter lower and capital, each without and with a final "." (Whisper
-    writes "go left" as " Go left."), duplicates left out, in that order. Words are parted by single
-    spaces; a final "." given is taken as the one Whisper may add."""
-    stem = " ".join(phrase.split()).rstrip(".")
-    if not stem:
-        raise ValueError(f"the phrase {phrase!r} has no words")
-    forms = [f" {first}{stem[1:]}{end}" for first in (stem[0].lower(), stem[0].upper()) for end in ("", ".")]
-    return list(dict.fromkeys(forms))
 
 
 def forced_log_likelihood(logits: np.ndarray, tokens: Sequence[int], manifest: WhisperManifest) -> float:

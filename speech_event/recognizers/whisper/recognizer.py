@@ -6,10 +6,11 @@ each piece; the pieces' texts are joined. Confidence: 1 - no_speech_prob of the 
 the robot's node reports it. A language with no token in the model directory's config.json (Whisper
 has none for Kinyarwanda) is refused when the engine is built.
 
-With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing in
-the forms Whisper writes it, in the tokens Whisper's tokenizer gives them (forced.py,
-tokenizer.py), the answer chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s
-window: only the first piece is decoded then.
+With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing
+(forced.py) in the forms Whisper writes it (written_forms.py: its usual ones, and for a phrase the
+free text may be a mishearing of, the phrase in the free text's punctuation), each form in the
+tokens Whisper's tokenizer gives it (tokenizer.py); the answer chosen as onnx/grammar_choice.py
+says. A command fits in Whisper's 30 s window: only the first piece is decoded then.
 """
 
 from pathlib import Path
@@ -23,14 +24,20 @@ from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
 from speech_event.recognizers.onnx.compiled_grammars import CompiledGrammars
 from speech_event.recognizers.onnx.directory import CPU_FP32, Runtime, exported_directory
-from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, GrammarChoice
+from speech_event.recognizers.onnx.grammar_choice import (
+    NEURAL_GRAMMAR_THRESHOLD,
+    GrammarChoice,
+    heard_as,
+    spelt,
+)
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
-from speech_event.recognizers.whisper.forced import phrase_variants, score_phrases
+from speech_event.recognizers.whisper.forced import score_phrases
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
+from speech_event.recognizers.whisper.written_forms import phrase_as_written, phrase_variants
 
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10
@@ -153,22 +160,37 @@ class WhisperRecognizer:
         decoding = self._model.decoding(whisper_log_mel(audio, self._manifest.mel_bands), run)
         prompted = decoding(self._prompt)  # one pass, from which the free text and the phrases go on
         free = whisper_greedy(decoding.fork(), self._prompt, self._manifest, prompted)
+        free_text = text_of(free.tokens, self._pieces, self._manifest.timestamp_begin)
         owners: List[Tuple[str, List[int]]] = [
             (phrase, tokens) for phrase, each in forms.items() for tokens in each
         ]
+        owners += self._as_written(forms, free_text)
         sequences = [tokens for _, tokens in owners]
         scores = score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)
         best: Dict[str, float] = {}
         for (phrase, _), score in zip(owners, scores):
             best[phrase] = max(score, best.get(phrase, -np.inf))
-        choice = GrammarChoice(
-            text_of(free.tokens, self._pieces, self._manifest.timestamp_begin),
-            free.score,
-            best,
-        )
+        choice = GrammarChoice(free_text, free.score, best)
         self._last_choice = choice
         no_speech = free.no_speech_prob
         return choice.transcript(self._threshold, None if no_speech is None else 1.0 - no_speech)
+
+    def _as_written(self, forms: PhraseForms, free_text: str) -> List[Tuple[str, List[int]]]:
+        """Each phrase the free text is that phrase misheard (the only phrases the decision may
+        take besides the free text itself), written as the free text is, where that is a form the
+        phrase has not: scored too, so that the phrase is judged in Whisper's own punctuation."""
+        said = spelt(free_text)
+        written = []
+        for phrase, each in forms.items():
+            if phrase == said or not heard_as(said, phrase):
+                continue
+            try:
+                tokens = self._tokenizer.encode(phrase_as_written(phrase, free_text))
+            except ModelError:
+                continue  # written with a letter the model cannot write; its other forms stand
+            if tokens not in each:
+                written.append((phrase, tokens))
+        return written
 
     def stop(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""

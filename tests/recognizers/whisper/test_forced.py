@@ -26,7 +26,7 @@ from fixtures.whisper_tones_model import (
     whisper_tones_model_directory,
 )
 from speech_event.recognizers.whisper.features import whisper_log_mel
-from speech_event.recognizers.whisper.forced import forced_log_likelihood, phrase_variants, score_phrases
+from speech_event.recognizers.whisper.forced import forced_log_likelihood, score_phrases
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.model import DECODER_FILE, DecoderSession, WhisperModel
@@ -191,11 +191,3 @@ def test_greedy_scores_what_it_samples_and_the_eot_it_ends_on() -> None:
     assert cut.tokens == [1, 0, 0, 0]
     then_zero = 4.0 - np.log(np.exp(4.0) + np.exp(1.0) + np.exp(2.0))
     assert cut.score == pytest.approx(3 * then_zero, abs=1e-12)
-
-
-def test_phrase_variants_are_whispers_surface_forms() -> None:
-    assert phrase_variants("go left") == [" go left", " go left.", " Go left", " Go left."]
-    assert phrase_variants("  Go   left. ") == [" go left", " go left.", " Go left", " Go left."]
-    assert phrase_variants("42") == [" 42", " 42."]  # no capital: no duplicates
-    with pytest.raises(ValueError):
-        phrase_variants(" . ")

@@ -13,9 +13,9 @@ from fixtures.trained_whisper import tiny_en_directory
 from fixtures.whisper_tones_model import MANIFEST, TIMESTAMP_BEGIN, whisper_tones_model_directory
 from speech_event.errors import ModelError
 from speech_event.exporters.faster_whisper import read_vocabulary, token_pieces
-from speech_event.recognizers.whisper.forced import phrase_variants
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer, word_pattern
+from speech_event.recognizers.whisper.written_forms import phrase_variants
 from tests.helpers.paths import ROOT
 
 TINY_EN_FOLDER = tiny_en_directory()

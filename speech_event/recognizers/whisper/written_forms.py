@@ -1,0 +1,93 @@
+"""The texts Whisper may write a grammar's phrase as: a phrase is scored in each (forced.py) and
+judged by its best, since the model gives the same words in another surface form (no capital, no
+final stop, no comma where it would write one) far less probability.
+
+Two kinds: the forms of every utterance (``phrase_variants``: " go left", " Go left." ...), and,
+for a phrase the free decoding is that phrase misheard, the phrase written as the free text is
+(``phrase_as_written``): tiny.en wrote the cards recording of "eight of spades four of clubs seven
+of hearts" as " Eight of spades, four of close, seven of hearts." (-1.9 nats), and the phrase
+scores -8.4 nats against it without the commas, -3.9 with them (within the threshold).
+"""
+
+import re
+from typing import List, Optional, Tuple
+
+from speech_event.recognizers.onnx.grammar_choice import spelt
+
+# A word of the free text: what comes before its letters or digits, they, and what comes after
+_WRITTEN_WORD = re.compile(r"^(\W*)(.*?)(\W*)$", re.DOTALL)
+
+
+def phrase_variants(phrase: str) -> List[str]:
+    """The texts Whisper may write a phrase as, to score each: after a leading space (Whisper's text
+    starts with one), the first letter lower and capital, each without and with a final "." (Whisper
+    writes "go left" as " Go left."), duplicates left out, in that order. Words are parted by single
+    spaces; a final "." given is taken as the one Whisper may add."""
+    stem = " ".join(phrase.split()).rstrip(".")
+    if not stem:
+        raise ValueError(f"the phrase {phrase!r} has no words")
+    forms = [f" {first}{stem[1:]}{end}" for first in (stem[0].lower(), stem[0].upper()) for end in ("", ".")]
+    return list(dict.fromkeys(forms))
+
+
+WrittenWord = Tuple[str, str, str, bool]  # spelt word, punctuation before, punctuation after, capital
+
+
+def written_words(text: str) -> List[WrittenWord]:
+    """Each word of ``text`` as a grammar spells it (``spelt``: "10" is "ten"), with the
+    punctuation written before and after it and whether it starts with a capital. A written word
+    spelt as several ("25": "twenty five") gives the first its punctuation before and capital, the
+    last its punctuation after."""
+    words: List[WrittenWord] = []
+    for chunk in text.split():
+        match = _WRITTEN_WORD.match(chunk)
+        assert match is not None  # every string matches
+        before, core, after = match.groups()
+        each = spelt(core).split()
+        for index, word in enumerate(each):
+            first, last = index == 0, index == len(each) - 1
+            words.append((word, before if first else "", after if last else "", first and core[:1].isupper()))
+    return words
+
+
+def aligned(phrase: List[str], heard: List[str]) -> List[Optional[int]]:
+    """For each word of ``phrase``, the index of the word of ``heard`` it stands for in a least-edits
+    alignment (the same word or one heard in its place), None for a word not heard; a tie keeps
+    the pairing of words in order."""
+    rows, columns = len(phrase) + 1, len(heard) + 1
+    edits = [[0] * columns for _ in range(rows)]
+    for i in range(rows):
+        for j in range(columns):
+            if i == 0 or j == 0:
+                edits[i][j] = i + j
+            else:
+                changed = edits[i - 1][j - 1] + (phrase[i - 1] != heard[j - 1])
+                edits[i][j] = min(changed, edits[i - 1][j] + 1, edits[i][j - 1] + 1)
+    pairs: List[Optional[int]] = [None] * len(phrase)
+    i, j = len(phrase), len(heard)
+    while i > 0 and j > 0:
+        if edits[i][j] == edits[i - 1][j - 1] + (phrase[i - 1] != heard[j - 1]):
+            pairs[i - 1] = j - 1
+            i, j = i - 1, j - 1
+        elif edits[i][j] == edits[i - 1][j] + 1:
+            i -= 1
+        else:
+            j -= 1
+    return pairs
+
+
+def phrase_as_written(phrase: str, free_text: str) -> str:
+    """``phrase`` written as Whisper wrote ``free_text``: each phrase word takes the punctuation and
+    capital of the free word it stands for (``aligned``), a word not heard none; after a leading
+    space, as Whisper writes. " Eight of spades, four of close, seven of hearts." writes "eight of
+    spades four of clubs seven of hearts" as " Eight of spades, four of clubs, seven of hearts."."""
+    words = phrase.split()
+    heard = written_words(free_text)
+    out = []
+    for word, index in zip(words, aligned(words, [word for word, _, _, _ in heard])):
+        if index is None:
+            out.append(word)
+            continue
+        _, before, after, capital = heard[index]
+        out.append(f"{before}{word[:1].upper() + word[1:] if capital else word}{after}")
+    return " " + " ".join(out)

@@ -1,0 +1,56 @@
+"""The forms a phrase is scored in: Whisper's usual ones, and the phrase written as the free text is."""
+
+import pytest
+
+from speech_event.recognizers.whisper.written_forms import (
+    aligned,
+    phrase_as_written,
+    phrase_variants,
+    written_words,
+)
+
+
+def test_phrase_variants_are_whispers_surface_forms() -> None:
+    assert phrase_variants("go left") == [" go left", " go left.", " Go left", " Go left."]
+    assert phrase_variants("  Go   left. ") == [" go left", " go left.", " Go left", " Go left."]
+    assert phrase_variants("42") == [" 42", " 42."]  # no capital: no duplicates
+    with pytest.raises(ValueError):
+        phrase_variants(" . ")
+
+
+def test_written_words_keep_each_words_punctuation_and_capital() -> None:
+    assert written_words(' "Eight of spades, 25 of close?" ') == [
+        ("eight", '"', "", True),
+        ("of", "", "", False),
+        ("spades", "", ",", False),
+        ("twenty", "", "", False),  # "25" in words: the first takes what is before, the last what is after
+        ("five", "", "", False),
+        ("of", "", "", False),
+        ("close", "", '?"', False),
+    ]
+    assert written_words(" ... ") == []
+
+
+def test_phrase_words_are_aligned_with_the_words_heard_in_their_place() -> None:
+    assert aligned(["what", "is", "your", "name"], ["what", "is", "it", "your", "name"]) == [0, 1, 3, 4]
+    assert aligned(["tell", "me", "a", "joke"], ["tell", "me", "joke"]) == [0, 1, None, 2]
+    assert aligned(["play", "some", "music"], ["place", "a", "music"]) == [0, 1, 2]
+    assert aligned(["go"], []) == [None]
+    assert aligned([], ["go"]) == []
+
+
+def test_a_phrase_is_written_as_the_free_text_is() -> None:
+    assert (
+        phrase_as_written(
+            "eight of spades four of clubs seven of hearts",
+            " Eight of spades, four of close, seven of hearts.",
+        )
+        == " Eight of spades, four of clubs, seven of hearts."
+    )
+    assert phrase_as_written("what is your name", " What is it your name?") == " What is your name?"
+    assert phrase_as_written("play some music", " Place a music.") == " Play some music."
+    assert (
+        phrase_as_written("tell me a joke", " Tell me, Joke.") == " Tell me, a Joke."
+    )  # "a" not heard: bare
+    assert phrase_as_written("ten of clubs", " 10 of clubs.") == " ten of clubs."  # a digit has no capital
+    assert phrase_as_written("go left", "") == " go left"
