@@ -180,9 +180,11 @@ class WhisperRecognizer:
         take besides the free text itself), written as the free text is, where that is a form the
         phrase has not: scored too, so that the phrase is judged in Whisper's own punctuation."""
         said = spelt(free_text)
+        if said in forms:
+            return []  # the free text is a phrase: the decision takes it
         written = []
         for phrase, each in forms.items():
-            if phrase == said or not heard_as(said, phrase):
+            if not heard_as(said, phrase):
                 continue
             try:
                 tokens = self._tokenizer.encode(phrase_as_written(phrase, free_text))

@@ -10,7 +10,7 @@ scores -8.4 nats against it without the commas, -3.9 with them (within the thres
 """
 
 import re
-from typing import List, Optional, Tuple
+from typing import List, NamedTuple, Optional
 
 from speech_event.recognizers.onnx.grammar_choice import spelt
 
@@ -30,14 +30,21 @@ def phrase_variants(phrase: str) -> List[str]:
     return list(dict.fromkeys(forms))
 
 
-WrittenWord = Tuple[str, str, str, bool]  # spelt word, punctuation before, punctuation after, capital
+class WrittenWord(NamedTuple):
+    """A word of the free text as a grammar spells it, and how it was written."""
+
+    word: str
+    before: str  # punctuation written before it
+    after: str  # and after it
+    capital: bool  # written with a capital first letter
 
 
 def written_words(text: str) -> List[WrittenWord]:
     """Each word of ``text`` as a grammar spells it (``spelt``: "10" is "ten"), with the
     punctuation written before and after it and whether it starts with a capital. A written word
     spelt as several ("25": "twenty five") gives the first its punctuation before and capital, the
-    last its punctuation after."""
+    last its punctuation after. Punctuation between words (" - ") and inside one ("left-hand") is
+    left out: a form need not be the free text's, only the phrase in its sentence's punctuation."""
     words: List[WrittenWord] = []
     for chunk in text.split():
         match = _WRITTEN_WORD.match(chunk)
@@ -46,14 +53,18 @@ def written_words(text: str) -> List[WrittenWord]:
         each = spelt(core).split()
         for index, word in enumerate(each):
             first, last = index == 0, index == len(each) - 1
-            words.append((word, before if first else "", after if last else "", first and core[:1].isupper()))
+            words.append(
+                WrittenWord(
+                    word, before if first else "", after if last else "", first and core[:1].isupper()
+                )
+            )
     return words
 
 
 def aligned(phrase: List[str], heard: List[str]) -> List[Optional[int]]:
     """For each word of ``phrase``, the index of the word of ``heard`` it stands for in a least-edits
-    alignment (the same word or one heard in its place), None for a word not heard; a tie keeps
-    the pairing of words in order."""
+    alignment (the same word or one heard in its place), None for a word not heard. Of alignments
+    with as few edits, the one that pairs the last words: it is read back from the end."""
     rows, columns = len(phrase) + 1, len(heard) + 1
     edits = [[0] * columns for _ in range(rows)]
     for i in range(rows):
@@ -77,17 +88,25 @@ def aligned(phrase: List[str], heard: List[str]) -> List[Optional[int]]:
 
 
 def phrase_as_written(phrase: str, free_text: str) -> str:
-    """``phrase`` written as Whisper wrote ``free_text``: each phrase word takes the punctuation and
-    capital of the free word it stands for (``aligned``), a word not heard none; after a leading
-    space, as Whisper writes. " Eight of spades, four of close, seven of hearts." writes "eight of
-    spades four of clubs seven of hearts" as " Eight of spades, four of clubs, seven of hearts."."""
+    """``phrase`` written as Whisper wrote ``free_text``, after a leading space as Whisper writes:
+    its first word takes the free text's opening punctuation and capital, its last word the closing
+    punctuation, and each word between the punctuation and capital of the free word it stands for
+    (``aligned``), a word not heard none. " Eight of spades, four of close, seven of hearts." writes
+    "eight of spades four of clubs seven of hearts" as " Eight of spades, four of clubs, seven of
+    hearts."."""
     words = phrase.split()
     heard = written_words(free_text)
+    if not heard:
+        return " " + " ".join(words)
+    last = len(heard) - 1
     out = []
-    for word, index in zip(words, aligned(words, [word for word, _, _, _ in heard])):
-        if index is None:
-            out.append(word)
-            continue
-        _, before, after, capital = heard[index]
-        out.append(f"{before}{word[:1].upper() + word[1:] if capital else word}{after}")
+    for position, index in enumerate(aligned(words, [each.word for each in heard])):
+        # whose opening and whose closing the word takes: the free text's own at the phrase's ends
+        opens = 0 if position == 0 else None if index == 0 else index
+        closes = last if position == len(words) - 1 else None if index == last else index
+        word = words[position]
+        if opens is not None:
+            opening = heard[opens]
+            word = f"{opening.before}{word[:1].upper() + word[1:] if opening.capital else word}"
+        out.append(word if closes is None else word + heard[closes].after)
     return " " + " ".join(out)

@@ -2,6 +2,7 @@
 and against Hugging Face's tokenizer (the ``tokenizers`` package, merges and all) on trained
 tiny.en's vocabulary, whose tokenizer.json ships beside its model.bin."""
 
+from dataclasses import dataclass
 from typing import List
 
 import pytest
@@ -18,12 +19,28 @@ from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer, word_pa
 from speech_event.recognizers.whisper.written_forms import phrase_variants
 from tests.helpers.paths import ROOT
 
-TINY_EN_FOLDER = tiny_en_directory()
-TINY_EN_TEXTS, TINY_EN_SOURCE = read_vocabulary(TINY_EN_FOLDER)
-TINY_EN_TOKENIZER = WhisperTokenizer(
-    token_pieces(TINY_EN_TEXTS, TINY_EN_SOURCE), TINY_EN_TEXTS.index("<|endoftext|>")
-)
-REFERENCE = Tokenizer.from_file(str(TINY_EN_FOLDER / "tokenizer.json"))
+
+@dataclass(frozen=True)
+class TinyEn:
+    """tiny.en's token texts, our tokenizer of them and Hugging Face's of its tokenizer.json."""
+
+    texts: List[str]
+    ours: WhisperTokenizer
+    reference: Tokenizer
+
+    def spelt(self, text: str) -> List[str]:
+        return [self.texts[token] for token in self.ours.encode(text)]
+
+    def agree(self, text: str) -> bool:
+        return self.ours.encode(text) == self.reference.encode(text, add_special_tokens=False).ids
+
+
+@pytest.fixture(scope="module")
+def tiny_en() -> TinyEn:
+    folder = tiny_en_directory()
+    texts, source = read_vocabulary(folder)
+    ours = WhisperTokenizer(token_pieces(texts, source), texts.index("<|endoftext|>"))
+    return TinyEn(texts, ours, Tokenizer.from_file(str(folder / "tokenizer.json")))
 
 
 def _pieces(tokenizer: WhisperTokenizer, text: str, pieces: List[bytes]) -> List[bytes]:
@@ -59,7 +76,7 @@ def test_the_lowest_ranked_pair_merges_first_and_a_word_that_is_a_token_is_that_
     assert _pieces(tokenizer, "b abc", pieces) == [b"b", b" ", b"a", b"bc"]
 
 
-def test_a_part_no_text_token_is_is_named() -> None:
+def test_a_part_that_no_text_token_is_is_named() -> None:
     pieces = [b"a", b"b", b"<|", b"|>", b"<|endoftext|>", b"<|endoftext|>"]
     with pytest.raises(ModelError) as error:
         WhisperTokenizer(pieces, 4).encode("<|endoftext|>")  # the special token is not a text token
@@ -80,9 +97,9 @@ def test_the_tones_models_words_are_a_word_start_letter_then_inner_letters() -> 
     assert str(error.value) == "the model's text tokens cannot spell ' Go left.': no token is b' '"
 
 
-def test_tiny_en_spells_spades_as_its_tokenizer_does() -> None:
-    # longest match took " spa" + "des", which the model gives 17 nats less than its own spelling
-    assert [TINY_EN_TEXTS[token] for token in TINY_EN_TOKENIZER.encode(" Eight of spades.")] == [
+def test_tiny_en_spells_spades_as_its_tokenizer_does(tiny_en: TinyEn) -> None:
+    # longest match took " spa" + "des", which the model gives 16 nats less than its own spelling
+    assert tiny_en.spelt(" Eight of spades.") == [
         "\u0120Eight",
         "\u0120of",
         "\u0120sp",
@@ -91,7 +108,9 @@ def test_tiny_en_spells_spades_as_its_tokenizer_does() -> None:
     ]
 
 
-def test_every_form_of_the_robots_commands_and_of_everyday_sentences_is_tokenized_as_hugging_faces() -> None:
+def test_every_form_of_the_robots_commands_and_of_everyday_sentences_is_tokenized_as_hugging_faces(
+    tiny_en: TinyEn,
+) -> None:
     sentences = [
         line
         for path in (
@@ -104,9 +123,9 @@ def test_every_form_of_the_robots_commands_and_of_everyday_sentences_is_tokenize
     assert len(sentences) == 32 + 65
     for sentence in sentences:
         for form in phrase_variants(sentence):
-            assert TINY_EN_TOKENIZER.encode(form) == REFERENCE.encode(form, add_special_tokens=False).ids
+            assert tiny_en.agree(form), form
     # the command longest match spelt otherwise
-    assert [TINY_EN_TEXTS[token] for token in TINY_EN_TOKENIZER.encode(" Louder")] == ["\u0120Lou", "der"]
+    assert tiny_en.spelt(" Louder") == ["\u0120Lou", "der"]
 
 
 TEXT = st.lists(
@@ -122,5 +141,5 @@ TEXT = st.lists(
 
 @settings(max_examples=300, deadline=None)
 @given(TEXT)
-def test_any_text_is_tokenized_as_hugging_faces_tokenizer_does(text: str) -> None:
-    assert TINY_EN_TOKENIZER.encode(text) == REFERENCE.encode(text, add_special_tokens=False).ids
+def test_any_text_is_tokenized_as_hugging_faces_tokenizer_does(tiny_en: TinyEn, text: str) -> None:
+    assert tiny_en.agree(text)

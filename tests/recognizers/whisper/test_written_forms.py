@@ -28,6 +28,11 @@ def test_written_words_keep_each_words_punctuation_and_capital() -> None:
         ("of", "", "", False),
         ("close", "", '?"', False),
     ]
+    assert written_words(" Go - left-hand ... ") == [  # punctuation between words or inside one: left out
+        ("go", "", "", True),
+        ("left", "", "", False),
+        ("hand", "", "", False),
+    ]
     assert written_words(" ... ") == []
 
 
@@ -35,6 +40,7 @@ def test_phrase_words_are_aligned_with_the_words_heard_in_their_place() -> None:
     assert aligned(["what", "is", "your", "name"], ["what", "is", "it", "your", "name"]) == [0, 1, 3, 4]
     assert aligned(["tell", "me", "a", "joke"], ["tell", "me", "joke"]) == [0, 1, None, 2]
     assert aligned(["play", "some", "music"], ["place", "a", "music"]) == [0, 1, 2]
+    assert aligned(["go", "to", "the"], ["goto", "the"]) == [None, 0, 1]  # read back from the end
     assert aligned(["go"], []) == [None]
     assert aligned([], ["go"]) == []
 
@@ -54,3 +60,9 @@ def test_a_phrase_is_written_as_the_free_text_is() -> None:
     )  # "a" not heard: bare
     assert phrase_as_written("ten of clubs", " 10 of clubs.") == " ten of clubs."  # a digit has no capital
     assert phrase_as_written("go left", "") == " go left"
+    # the free text's opening and closing go to the phrase's ends, whatever the words in between
+    assert phrase_as_written("go to the kitchen", " Goto the kitchen.") == " Go to the kitchen."
+    assert phrase_as_written("turn the lights off", " Turn the lights.") == " Turn the lights off."
+    assert phrase_as_written("go left", " Go left, now.") == " Go left."
+    assert phrase_as_written("come here", " So, come here!") == " Come here!"
+    assert phrase_as_written("go", ' "Go!"') == ' "Go!"'
