@@ -300,7 +300,9 @@ def run_engine(name: str, voices: Sequence[str], record: Optional[TextIO]) -> No
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--engines", nargs="+", choices=sorted(ENGINES), default=list(ENGINES))
-    parser.add_argument("--voices", nargs="+", choices=sorted(VOICES), default=list(VOICES))
+    parser.add_argument(
+        "--voices", nargs="*", choices=sorted(VOICES), default=list(VOICES), help="none: the recordings only"
+    )
     parser.add_argument("--record", type=Path, help="write each utterance's decision here (JSON lines)")
     parser.add_argument(
         "--replay", type=Path, help="judge a --record file's decisions again; nothing is decoded"

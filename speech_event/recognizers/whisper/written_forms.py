@@ -34,17 +34,19 @@ class WrittenWord(NamedTuple):
     """A word of the free text as a grammar spells it, and how it was written."""
 
     word: str
+    written: str  # as the free text wrote it ("8", "Queen"); a number of several words: the word
     before: str  # punctuation written before it
     after: str  # and after it
     capital: bool  # written with a capital first letter
 
 
 def written_words(text: str) -> List[WrittenWord]:
-    """Each word of ``text`` as a grammar spells it (``spelt``: "10" is "ten"), with the
-    punctuation written before and after it and whether it starts with a capital. A written word
-    spelt as several ("25": "twenty five") gives the first its punctuation before and capital, the
-    last its punctuation after. Punctuation between words (" - ") and inside one ("left-hand") is
-    left out: a form need not be the free text's, only the phrase in its sentence's punctuation."""
+    """Each word of ``text`` as a grammar spells it (``spelt``: "10" is "ten"), with its
+    writing, the punctuation written before and after it and whether it starts with a capital. A
+    written word spelt as several ("25": "twenty five") gives the first its punctuation before and
+    capital, the last its punctuation after, and each is written as itself. Punctuation between
+    words (" - ") and inside one ("left-hand") is left out: a form need not be the free text's,
+    only the phrase in its sentence's punctuation."""
     words: List[WrittenWord] = []
     for chunk in text.split():
         match = _WRITTEN_WORD.match(chunk)
@@ -55,7 +57,11 @@ def written_words(text: str) -> List[WrittenWord]:
             first, last = index == 0, index == len(each) - 1
             words.append(
                 WrittenWord(
-                    word, before if first else "", after if last else "", first and core[:1].isupper()
+                    word,
+                    core if len(each) == 1 else word,
+                    before if first else "",
+                    after if last else "",
+                    first and core[:1].isupper(),
                 )
             )
     return words
@@ -91,9 +97,10 @@ def phrase_as_written(phrase: str, free_text: str) -> str:
     """``phrase`` written as Whisper wrote ``free_text``, after a leading space as Whisper writes:
     its first word takes the free text's opening punctuation and capital, its last word the closing
     punctuation, and each word between the punctuation and capital of the free word it stands for
-    (``aligned``), a word not heard none. " Eight of spades, four of close, seven of hearts." writes
-    "eight of spades four of clubs seven of hearts" as " Eight of spades, four of clubs, seven of
-    hearts."."""
+    (``aligned``), a word not heard none; a word heard as said is written as the free text wrote it
+    (a digit: "8"). " Eight of spades, four of close, seven of hearts." writes "eight of spades four
+    of clubs seven of hearts" as " Eight of spades, four of clubs, seven of hearts."; " 8 of spades,
+    4 of close, 7 of hearts." as " 8 of spades, 4 of clubs, 7 of hearts."."""
     words = phrase.split()
     heard = written_words(free_text)
     if not heard:
@@ -105,8 +112,10 @@ def phrase_as_written(phrase: str, free_text: str) -> str:
         opens = 0 if position == 0 else None if index == 0 else index
         closes = last if position == len(words) - 1 else None if index == last else index
         word = words[position]
+        if index is not None and heard[index].word == word:
+            word = heard[index].written
         if opens is not None:
             opening = heard[opens]
-            word = f"{opening.before}{word[:1].upper() + word[1:] if opening.capital else word}"
+            word = opening.before + (word[:1].upper() + word[1:] if opening.capital else word)
         out.append(word if closes is None else word + heard[closes].after)
     return " " + " ".join(out)

@@ -32,7 +32,8 @@ class TinyEn:
         return [self.texts[token] for token in self.ours.encode(text)]
 
     def agree(self, text: str) -> bool:
-        return self.ours.encode(text) == self.reference.encode(text, add_special_tokens=False).ids
+        expected: List[int] = self.reference.encode(text, add_special_tokens=False).ids
+        return self.ours.encode(text) == expected
 
 
 @pytest.fixture(scope="module")

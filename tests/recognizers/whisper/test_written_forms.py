@@ -18,20 +18,22 @@ def test_phrase_variants_are_whispers_surface_forms() -> None:
         phrase_variants(" . ")
 
 
-def test_written_words_keep_each_words_punctuation_and_capital() -> None:
-    assert written_words(' "Eight of spades, 25 of close?" ') == [
-        ("eight", '"', "", True),
-        ("of", "", "", False),
-        ("spades", "", ",", False),
-        ("twenty", "", "", False),  # "25" in words: the first takes what is before, the last what is after
-        ("five", "", "", False),
-        ("of", "", "", False),
-        ("close", "", '?"', False),
+def test_written_words_keep_each_words_writing_punctuation_and_capital() -> None:
+    assert written_words(' "Eight of spades, 25 of close, 7?" ') == [
+        ("eight", "Eight", '"', "", True),
+        ("of", "of", "", "", False),
+        ("spades", "spades", "", ",", False),
+        # "25" in words: each written as itself, the first takes what is before, the last what is after
+        ("twenty", "twenty", "", "", False),
+        ("five", "five", "", "", False),
+        ("of", "of", "", "", False),
+        ("close", "close", "", ",", False),
+        ("seven", "7", "", '?"', False),
     ]
     assert written_words(" Go - left-hand ... ") == [  # punctuation between words or inside one: left out
-        ("go", "", "", True),
-        ("left", "", "", False),
-        ("hand", "", "", False),
+        ("go", "Go", "", "", True),
+        ("left", "left", "", "", False),
+        ("hand", "hand", "", "", False),
     ]
     assert written_words(" ... ") == []
 
@@ -58,11 +60,22 @@ def test_a_phrase_is_written_as_the_free_text_is() -> None:
     assert (
         phrase_as_written("tell me a joke", " Tell me, Joke.") == " Tell me, a Joke."
     )  # "a" not heard: bare
-    assert phrase_as_written("ten of clubs", " 10 of clubs.") == " ten of clubs."  # a digit has no capital
+    # a word heard as said is written as heard: its digits, its capitals
+    assert (
+        phrase_as_written(
+            "eight of spades four of clubs seven of hearts", " 8 of spades, 4 of close, 7 of hearts."
+        )
+        == " 8 of spades, 4 of clubs, 7 of hearts."
+    )
+    assert phrase_as_written("four queen of clubs", " 4. Queen of Clothes") == " 4. Queen of Clubs"
+    assert phrase_as_written("go left", " GO LEFT.") == " GO LEFT."
+    assert (
+        phrase_as_written("set volume to twenty five", " Set volume to 25.") == " Set volume to twenty five."
+    )
     assert phrase_as_written("go left", "") == " go left"
     # the free text's opening and closing go to the phrase's ends, whatever the words in between
     assert phrase_as_written("go to the kitchen", " Goto the kitchen.") == " Go to the kitchen."
     assert phrase_as_written("turn the lights off", " Turn the lights.") == " Turn the lights off."
     assert phrase_as_written("go left", " Go left, now.") == " Go left."
-    assert phrase_as_written("come here", " So, come here!") == " Come here!"
+    assert phrase_as_written("come here", " So, come here!") == " Come here!"  # heard as said, at the start
     assert phrase_as_written("go", ' "Go!"') == ' "Go!"'
