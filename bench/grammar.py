@@ -26,9 +26,10 @@ speech published as a phrase; the ratio the engine judged by (nats: the most lik
 against the free decoding) as min / median / max for commands and for other speech; the
 nearest cases; and the decoding time per second of audio. Printed; nothing is asserted.
 
-``--record FILE`` writes each decision (for the neural engines the free decoding and every phrase's
-score); ``--replay FILE`` judges those again with today's rule, decoding nothing: how a change of
-the rule (onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
+``--record FILE`` writes each decision (for the neural engines the free decoding, every phrase's
+score and, for Whisper, the evidence of the phrases about as probable as it); ``--replay FILE``
+judges those again with today's rule, decoding nothing: how a change of the rule
+(onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
 """
 
 import argparse
@@ -166,7 +167,12 @@ def decision(engine: Recognizer) -> Dict[str, object]:
     engines (so that other rules can be tried on the same figures), the ratio for pocketsphinx."""
     if isinstance(engine, (NemoRecognizer, WhisperRecognizer)) and engine.last_choice is not None:
         choice = engine.last_choice
-        return {"free": choice.free_text, "free_score": choice.free_score, "scores": choice.phrase_scores}
+        return {
+            "free": choice.free_text,
+            "free_score": choice.free_score,
+            "scores": choice.phrase_scores,
+            "evidence": dict(choice.evidence),
+        }
     return {"ratio": ratio_of(engine)}
 
 
@@ -218,7 +224,9 @@ def replay(record: Path) -> None:
         decided = json.loads(line)
         if "scores" not in decided:
             continue
-        choice = GrammarChoice(decided["free"], decided["free_score"], decided["scores"])
+        choice = GrammarChoice(
+            decided["free"], decided["free_score"], decided["scores"], decided.get("evidence", {})
+        )
         published = choice.transcript(NEURAL_GRAMMAR_THRESHOLD).text
         count(tallies.setdefault(decided["set"], Tally()), decided["expected"], published, best_ratio(choice))
     for label, tally in tallies.items():

@@ -15,6 +15,7 @@ import numpy as np
 from fixtures import recordings
 from fixtures.festival import festival_voice
 from fixtures.trained_whisper import tiny_en_directory
+from fixtures.tts import speak_tts
 from speech_event.grammar import load_grammar, phrases_grammar
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.onnx.grammar_choice import spelt
@@ -99,4 +100,27 @@ def test_a_command_heard_as_words_that_sound_like_it_is_published_and_near_misse
         ("what is it your name", "what is your name"),
         ("how old are you", ""),
         ("go to the kitchen later", ""),
+    ]
+
+
+def test_a_command_the_model_prefers_to_its_own_text_is_published_on_the_audios_evidence(
+    tiny_en: Path,
+) -> None:
+    """Greedy decoding is not the model's most likely text: in festival's kal voice tiny.en writes
+    "wave your hand" as " Wait, go ahead." and scores "wave your hand" above it, the audio raising
+    the phrase far above its score against silence: published. espeak's "follow the car" is
+    written " Fadl Macar.", below "thank you" (Whisper's text for silence), which the audio lowered:
+    rejected."""
+    commands = load_grammar(ROOT / "harness" / "data" / "robot_commands.txt")
+    engine = WhisperRecognizer(tiny_en, "english", grammar=commands)
+    heard = []
+    for speak, said in [(festival_voice("kal"), "wave your hand"), (speak_tts, "follow the car")]:
+        text = engine.transcribe(resample(speak(said, 48000), 48000, 16000)).text
+        choice = engine.last_choice
+        assert choice is not None
+        best = max(choice.phrase_scores, key=choice.phrase_scores.__getitem__)
+        heard.append((spelt(choice.free_text), text, best, choice.ratio(best) > 0, choice.evidence[best] > 8))
+    assert heard == [
+        ("wait go ahead", "wave your hand", "wave your hand", True, True),
+        ("fadl macar", "", "thank you", True, False),
     ]

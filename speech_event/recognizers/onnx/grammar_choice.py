@@ -7,7 +7,10 @@ has two words or more, the free text is that phrase misheard, and the phrase is 
 ``threshold`` nats less likely than the free text (a log-likelihood ratio). Misheard: one word heard
 otherwise ("bring me the red cop" for "bring me the red cup"), or words that sound like the phrase,
 at most a quarter of its phones different ("place a music" for "play some music", sounds_alike.py).
-Anything else is rejected, the most likely phrase named.
+Whisper adds one more way (``evidence``): a phrase the model finds about as probable as its own
+greedy text (at most PREFERRED_SLACK nats less), which the audio made far more probable than it is
+with nothing said (EVIDENCE_THRESHOLD nats, the phrase scored against silence), is taken whatever
+the free text's words. Anything else is rejected, the most likely phrase named.
 
 Why no more (issue 32, measured with trained Whisper tiny.en and base through bench/grammar.py):
 the ratio alone let a third of everyday speech through as a command. A short phrase the model
@@ -17,11 +20,26 @@ macar": +6.2 nats): out-of-grammar speech reached -0.3 nats and above, commands 
 wrong -0.1 to -3.8. What separates them is the words and their sounds: a command misheard is the
 command with one word changed, or words that sound like it; a near miss is a command with a word
 added or left out ("go to the kitchen later": 4 phones more than its 11) or other speech. A
-one-word phrase heard otherwise is another word ("stops", "dan's" for "dance"): never taken."""
+one-word phrase heard otherwise is another word ("stops", "dan's" for "dance"): never taken by the
+words.
 
+Why the evidence (issue 32, the same measurements): greedy decoding is not the model's most
+probable text. In festival's kal voice tiny.en wrote "wave your hand" as " Wait, go ahead.", yet
+scored "wave your hand" 0.2 nats above it (base: " Wait, Lord hand.", +2.7); base wrote "dance" as
+" Danz." (-0.4). Other words, so the words reject them. The ratio alone cannot take them: a
+phrase the model favours whatever is said scores above the free text of other speech too ("thank
+you", +7.2 nats over espeak's " I forgot to m- I'm gonna go out to home."), Whisper's known
+hallucination, the text it writes for silence. What parts them is how much the audio raised the
+phrase: log P(phrase | audio) - log P(phrase | silence). "wave your hand" +16.5, "dance" +8.3;
+"thank you" over that sentence -3.2. Of other speech, a phrase within PREFERRED_SLACK of the free
+text had at most +6.0 ("how are you" for base's " Hello, I'm Daryl"), and the highest evidence at
+any ratio, +14.1, was a near miss ("go to the kitchen later": its command at -4.6 nats), which the
+slack keeps out."""
+
+import math
 import re
-from dataclasses import dataclass
-from typing import Dict, Optional
+from dataclasses import dataclass, field
+from typing import Dict, List, Mapping, Optional
 
 from speech_event.ports import Transcript
 from speech_event.recognizers.onnx.sounds_alike import sounds_alike
@@ -30,6 +48,13 @@ from speech_event.recognizers.onnx.sounds_alike import sounds_alike
 # word misheard -0.1 to -3.8 nats (festival's and espeak's voices), heard as sound-alike words
 # -2.9 to +2.0; the tones models of every family: one letter off -9.4 to -10.
 NEURAL_GRAMMAR_THRESHOLD = -5.0
+# A phrase about as probable as the free text: quantization alone moves a text's score by about half
+# a nat (tiny.en's "wave your hand" in kal: +0.18 fp32, -0.31 int8). The nearest other speech with
+# evidence: " Don't stop." (base int8, espeak) and "stop" at -1.15 nats, +8.2.
+PREFERRED_SLACK = -0.5
+# The least evidence (nats) for such a phrase: commands measured +8.3 to +18.9, other speech within
+# the slack at most +6.0.
+EVIDENCE_THRESHOLD = 8.0
 
 _NOT_SPELT = re.compile(r"[^a-z' ]+")
 _NUMBER = re.compile(r"\d+")
@@ -92,10 +117,19 @@ class GrammarChoice:
     free_text: str
     free_score: float  # log-probability of the free decoding
     phrase_scores: Dict[str, float]  # log-probability of each phrase (its best form)
+    # For the phrases ``preferred_candidates`` names, when the engine can score a phrase with nothing
+    # said (Whisper): log P(phrase | audio) - log P(phrase | silence), its best form's.
+    evidence: Mapping[str, float] = field(default_factory=dict)
 
     def ratio(self, phrase: str) -> float:
         """log P(phrase) - log P(free text), in nats."""
         return self.phrase_scores[phrase] - self.free_score
+
+    def preferred_candidates(self, threshold: float) -> List[str]:
+        """The phrases whose evidence may decide: about as probable as the free text (PREFERRED_SLACK,
+        or ``threshold`` when that is stricter). Few or none: the engine scores only these unheard."""
+        least = max(threshold, PREFERRED_SLACK)
+        return [phrase for phrase in self.phrase_scores if self.ratio(phrase) >= least]
 
     def transcript(self, threshold: float, confidence: Optional[float] = None) -> Transcript:
         """The phrase said, or no text naming the most likely phrase as rejected."""
@@ -109,6 +143,13 @@ class GrammarChoice:
         ]
         if misheard:
             return Transcript(max(misheard, key=self.phrase_scores.__getitem__), confidence)
+        preferred = [
+            phrase
+            for phrase in self.preferred_candidates(threshold)
+            if self.evidence.get(phrase, -math.inf) >= EVIDENCE_THRESHOLD
+        ]
+        if preferred:
+            return Transcript(max(preferred, key=self.phrase_scores.__getitem__), confidence)
         return Transcript("", rejected=max(self.phrase_scores, key=self.phrase_scores.__getitem__))
 
 

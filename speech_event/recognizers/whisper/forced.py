@@ -6,16 +6,20 @@ A phrase's forms (written_forms.py) are tokenized as Whisper's tokenizer does (t
 model gives the same text in other tokens far less probability. The prompt's decoder pass is
 shared: it runs once, then each phrase's tokens run in one decoder call from a fork of the
 prompt's key/value cache.
+
+``UnheardScores`` scores the same way against silence: what the model gives a text with nothing
+said, against which the audio's evidence for a phrase is measured (onnx/grammar_choice.py).
 """
 
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from speech_event.recognizers.onnx.hypothesis import log_softmax
+from speech_event.recognizers.whisper.features import SAMPLE_RATE, whisper_log_mel
 from speech_event.recognizers.whisper.greedy import whisper_logits
 from speech_event.recognizers.whisper.manifest import WhisperManifest
-from speech_event.recognizers.whisper.model import Decoding
+from speech_event.recognizers.whisper.model import Decoding, WhisperOnnx
 
 
 def forced_log_likelihood(logits: np.ndarray, tokens: Sequence[int], manifest: WhisperManifest) -> float:
@@ -54,3 +58,27 @@ def score_phrases(
         logits = np.concatenate([after_prompt, session.fork()(tokens)]) if tokens else after_prompt
         scores.append(forced_log_likelihood(logits, tokens, manifest))
     return scores
+
+
+class UnheardScores:
+    """Token sequences' ``forced_log_likelihood`` after ``prompt`` with silence for audio: the
+    model's prior for a text, high for what it writes when nothing is said ("Thank you."). The
+    silence is encoded, and the prompt run over it, once, at the first call (Whisper pads every
+    piece to 30 s with zeros: a second of zeros is its empty window); each sequence then costs one
+    decoder call. Those calls are not stoppable: a few decoder calls on a phrase's tokens."""
+
+    def __init__(self, model: WhisperOnnx, prompt: Sequence[int], manifest: WhisperManifest) -> None:
+        self._model = model
+        self._prompt = list(prompt)
+        self._manifest = manifest
+        self._silence: Optional[Tuple[Decoding, np.ndarray]] = None
+
+    def __call__(self, sequences: Sequence[Sequence[int]]) -> List[float]:
+        if not sequences:
+            return []
+        if self._silence is None:
+            silence = whisper_log_mel(np.zeros(SAMPLE_RATE, np.float32), self._manifest.mel_bands)
+            decoding = self._model.decoding(silence)
+            self._silence = decoding, decoding(self._prompt)
+        decoding, prompted = self._silence
+        return score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)

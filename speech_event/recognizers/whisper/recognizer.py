@@ -9,10 +9,13 @@ has none for Kinyarwanda) is refused when the engine is built.
 With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing
 (forced.py) in the forms Whisper writes it (written_forms.py: its usual ones, and for a phrase the
 free text may be a mishearing of, the phrase in the free text's punctuation), each form in the
-tokens Whisper's tokenizer gives it (tokenizer.py); the answer chosen as onnx/grammar_choice.py
-says. A command fits in Whisper's 30 s window: only the first piece is decoded then.
+tokens Whisper's tokenizer gives it (tokenizer.py); the phrases about as probable as the free text
+scored against silence too (forced.UnheardScores: the audio's evidence for them); the answer
+chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
+piece is decoded then.
 """
 
+import dataclasses
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple, Union
 
@@ -32,7 +35,7 @@ from speech_event.recognizers.onnx.grammar_choice import (
 )
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
-from speech_event.recognizers.whisper.forced import score_phrases
+from speech_event.recognizers.whisper.forced import UnheardScores, score_phrases
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
@@ -84,6 +87,7 @@ class WhisperRecognizer:
             )
         self._prompt = self._manifest.prompt(language)
         self._tokenizer = WhisperTokenizer(self._pieces, self._manifest.eot)
+        self._unheard = UnheardScores(self._model, self._prompt, self._manifest)
         if len(self._pieces) != self._manifest.vocabulary_size or self._model.vocabulary_size not in (
             None,
             self._manifest.vocabulary_size,
@@ -167,10 +171,16 @@ class WhisperRecognizer:
         owners += self._as_written(forms, free_text)
         sequences = [tokens for _, tokens in owners]
         scores = score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)
-        best: Dict[str, float] = {}
-        for (phrase, _), score in zip(owners, scores):
-            best[phrase] = max(score, best.get(phrase, -np.inf))
-        choice = GrammarChoice(free_text, free.score, best)
+        best: Dict[str, Tuple[float, List[int]]] = {}
+        for (phrase, tokens), score in zip(owners, scores):
+            if phrase not in best or score > best[phrase][0]:
+                best[phrase] = score, tokens
+        choice = GrammarChoice(free_text, free.score, {phrase: score for phrase, (score, _) in best.items()})
+        if spelt(free_text) not in best:  # else the decision takes the free text
+            candidates = choice.preferred_candidates(self._threshold)
+            unheard = self._unheard([best[phrase][1] for phrase in candidates])
+            evidence = {phrase: best[phrase][0] - prior for phrase, prior in zip(candidates, unheard)}
+            choice = dataclasses.replace(choice, evidence=evidence)
         self._last_choice = choice
         no_speech = free.no_speech_prob
         return choice.transcript(self._threshold, None if no_speech is None else 1.0 - no_speech)

@@ -26,7 +26,7 @@ from fixtures.whisper_tones_model import (
     whisper_tones_model_directory,
 )
 from speech_event.recognizers.whisper.features import whisper_log_mel
-from speech_event.recognizers.whisper.forced import forced_log_likelihood, score_phrases
+from speech_event.recognizers.whisper.forced import UnheardScores, forced_log_likelihood, score_phrases
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.model import DECODER_FILE, DecoderSession, WhisperModel
@@ -84,6 +84,28 @@ def test_forcing_many_phrases_after_one_prompt_is_the_brute_force_score(tones_mo
     assert scores == [
         pytest.approx(_brute_force(tones_model, cross, tokens), abs=1e-5) for tokens in sequences
     ]
+
+
+def test_unheard_scores_are_the_brute_force_scores_against_silence_encoded_once(
+    tones_model: WhisperModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    encoded: List[int] = []
+    encode = WhisperModel.encode
+
+    def counted(model: WhisperModel, mel: np.ndarray, run: object = None) -> Dict[str, np.ndarray]:
+        encoded.append(mel.shape[-1])
+        return encode(model, mel)
+
+    monkeypatch.setattr(WhisperModel, "encode", counted)
+    unheard = UnheardScores(tones_model, PROMPT, MANIFEST)
+    assert unheard([]) == [] and encoded == []  # nothing to score: nothing encoded
+    sequences = [_tokens(text) for text in (" go left", " stop")]
+    silence = tones_model.encode(whisper_log_mel(np.zeros(0, np.float32), MANIFEST.mel_bands))
+    expected = [pytest.approx(_brute_force(tones_model, silence, tokens), abs=1e-5) for tokens in sequences]
+    encoded.clear()
+    assert unheard(sequences) == expected
+    assert unheard(sequences[::-1]) == expected[::-1]
+    assert encoded == [3000]  # one 30 s window, at the first call
 
 
 def _history_decoder(seed: int) -> onnx.ModelProto:
