@@ -109,8 +109,8 @@ def test_a_command_the_model_prefers_to_its_own_text_is_published_on_the_audios_
     """Greedy decoding is not the model's most likely text: in festival's kal voice tiny.en writes
     "wave your hand" as " Wait, go ahead." and scores "wave your hand" above it, the audio raising
     the phrase far above its score against silence: published. espeak's "follow the car" is
-    written " Fadl Macar.", below "thank you" (Whisper's text for silence), which the audio lowered:
-    rejected."""
+    written " Fadl Macar.", below "thank you" (the command the model most expects with nothing
+    said), which the audio lowered: rejected."""
     commands = load_grammar(ROOT / "harness" / "data" / "robot_commands.txt")
     engine = WhisperRecognizer(tiny_en, "english", grammar=commands)
     heard = []

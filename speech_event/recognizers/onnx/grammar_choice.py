@@ -27,14 +27,14 @@ Why the evidence (issue 32, the same measurements): greedy decoding is not the m
 probable text. In festival's kal voice tiny.en wrote "wave your hand" as " Wait, go ahead.", yet
 scored "wave your hand" 0.2 nats above it (base: " Wait, Lord hand.", +2.7); base wrote "dance" as
 " Danz." (-0.4). Other words, so the words reject them. The ratio alone cannot take them: a
-phrase the model favours whatever is said scores above the free text of other speech too ("thank
-you", +7.2 nats over espeak's " I forgot to m- I'm gonna go out to home."), Whisper's known
-hallucination, the text it writes for silence. What parts them is how much the audio raised the
-phrase: log P(phrase | audio) - log P(phrase | silence). "wave your hand" +16.5, "dance" +8.3;
-"thank you" over that sentence -3.2. Of other speech, a phrase within PREFERRED_SLACK of the free
-text had at most +6.0 ("how are you" for base's " Hello, I'm Daryl"), and the highest evidence at
-any ratio, +14.1, was a near miss ("go to the kitchen later": its command at -4.6 nats), which the
-slack keeps out."""
+phrase the model expects whatever is said scores above the free text of other speech too: "thank
+you", which tiny.en and base give -4.4 nats with nothing said (the next command, "yes", -8.1),
+scored up to 7 nats above the free text of espeak's sentences (" I forgot to m- I'm gonna go out
+to home."). What parts them is how much the audio raised the phrase: log P(phrase | audio) -
+log P(phrase | silence). "wave your hand" +16.5, "dance" +8.3; "thank you" over that sentence -3.2.
+Of other speech, a phrase within PREFERRED_SLACK of the free text had at most +6.0 ("how are you"
+for base's " Hello, I'm Daryl"), and the highest evidence at any ratio, +14.1, was a near miss
+("go to the kitchen later": its command at -4.6 nats), which the slack keeps out."""
 
 import math
 import re

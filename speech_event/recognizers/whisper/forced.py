@@ -62,10 +62,11 @@ def score_phrases(
 
 class UnheardScores:
     """Token sequences' ``forced_log_likelihood`` after ``prompt`` with silence for audio: the
-    model's prior for a text, high for what it writes when nothing is said ("Thank you."). The
-    silence is encoded, and the prompt run over it, once, at the first call (Whisper pads every
-    piece to 30 s with zeros: a second of zeros is its empty window); each sequence then costs one
-    decoder call. Those calls are not stoppable: a few decoder calls on a phrase's tokens."""
+    model's prior for a text, high for what it expects when nothing is said (tiny.en writes " you"
+    for silence and gives "thank you" -4.4 nats). The silence is encoded, and the prompt run over
+    it, once, at the first call (Whisper pads every piece to 30 s with zeros: a second of zeros is
+    its empty window); each sequence then costs one decoder call. Those calls are not stoppable: a
+    few decoder calls on a phrase's tokens."""
 
     def __init__(self, model: WhisperOnnx, prompt: Sequence[int], manifest: WhisperManifest) -> None:
         self._model = model
