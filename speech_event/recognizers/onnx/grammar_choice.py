@@ -52,8 +52,8 @@ NEURAL_GRAMMAR_THRESHOLD = -5.0
 # a nat (tiny.en's "wave your hand" in kal: +0.18 fp32, -0.31 int8). The nearest other speech with
 # evidence: " Don't stop." (base int8, espeak) and "stop" at -1.15 nats, +8.2.
 PREFERRED_SLACK = -0.5
-# The least evidence (nats) for such a phrase: commands measured +8.3 to +18.9, other speech within
-# the slack at most +6.0.
+# The least evidence (nats) for such a phrase: the commands it took through the node +8.3 and more,
+# other speech within the slack at most +6.0.
 EVIDENCE_THRESHOLD = 8.0
 
 _NOT_SPELT = re.compile(r"[^a-z' ]+")

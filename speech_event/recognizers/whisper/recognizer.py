@@ -100,19 +100,23 @@ class WhisperRecognizer:
         self._runs = StoppableRuns()
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
         self._grammars = CompiledGrammars(self._forms)
-        self._grammars.use(grammar)
         self._last_choice: Optional[GrammarChoice] = None
+        self.use_grammar(grammar)
 
     @property
     def sample_rate(self) -> int:
         return SAMPLE_RATE
 
     def check_grammar(self, grammar: Grammar) -> None:
-        """Every phrase must be spelt by the model's tokens in at least one form."""
+        """Every phrase must be spelt by the model's tokens in at least one form. The silence the
+        phrases are scored against is encoded here, when set_grammar is called, not at an utterance."""
         self._grammars.compiled(grammar)
+        self._unheard.prepare()
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
         self._grammars.use(grammar)
+        if grammar is not None:
+            self._unheard.prepare()
 
     def _forms(self, grammar: Grammar) -> PhraseForms:
         """Each phrase's token sequences, one for each form the model can spell."""

@@ -5,7 +5,7 @@ import dataclasses
 import json
 import shutil
 from pathlib import Path
-from typing import List, Sequence
+from typing import Dict, List, Sequence
 
 import numpy as np
 import pytest
@@ -265,3 +265,29 @@ def test_without_openai_whisper_the_export_of_a_checkpoint_says_how_to_get_it(tm
         "as an openai-whisper checkpoint, which needs openai-whisper: pip install 'speech-event[export]' "
         "(openai-whisper and torch); only for exporting, never on the robot\n"
     )
+
+
+def test_the_silence_phrases_are_scored_against_is_encoded_when_a_grammar_is_set_not_at_an_utterance(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    encoded: List[str] = []
+    encode = WhisperModel.encode
+
+    def counted(model: WhisperModel, mel: np.ndarray, run: object = None) -> Dict[str, np.ndarray]:
+        encoded.append("silence" if np.ptp(mel) == 0 else "audio")  # zeros: one value everywhere
+        return encode(model, mel)
+
+    monkeypatch.setattr(WhisperModel, "encode", counted)
+    free = WhisperRecognizer(whisper_tones_model_directory(), "english")
+    assert free.transcribe(_speech("stop")).text == "stop"
+    assert encoded == ["audio"]  # free speech never needs it
+    grammar = requested_grammar("stop|go left")
+    assert grammar is not None
+    free.check_grammar(grammar)  # set_grammar's check, in its thread
+    assert encoded == ["audio", "silence"]
+    free.use_grammar(grammar)
+    assert free.transcribe(_speech("stop")).text == "stop"
+    assert encoded == ["audio", "silence", "audio"]  # once for the engine
+    encoded.clear()
+    WhisperRecognizer(whisper_tones_model_directory(), "english", grammar=requested_grammar("stop"))
+    assert encoded == ["silence"]  # a grammar from the configuration: when the engine loads
