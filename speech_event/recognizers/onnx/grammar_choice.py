@@ -7,10 +7,11 @@ has two words or more, the free text is that phrase misheard, and the phrase is 
 ``threshold`` nats less likely than the free text (a log-likelihood ratio). Misheard: one word heard
 otherwise ("bring me the red cop" for "bring me the red cup"), or words that sound like the phrase,
 at most a quarter of its phones different ("place a music" for "play some music", sounds_alike.py).
-Whisper adds one more way (``evidence``): a phrase the model finds about as probable as its own
-greedy text (at most PREFERRED_SLACK nats less), which the audio made far more probable than it is
-with nothing said (EVIDENCE_THRESHOLD nats, the phrase scored against silence), is taken whatever
-the free text's words. Anything else is rejected, the most likely phrase named.
+Whisper adds one more way (``evidence``), when those take none: a phrase the model finds about as
+probable as its own greedy text (at most PREFERRED_SLACK nats less, or ``threshold`` when that is
+stricter), which the audio made far more probable than it is with nothing said (EVIDENCE_THRESHOLD
+nats, the phrase scored against silence), is taken whatever the free text's words. Anything else
+is rejected, the most likely phrase named.
 
 Why no more (issue 32, measured with trained Whisper tiny.en and base through bench/grammar.py):
 the ratio alone let a third of everyday speech through as a command. A short phrase the model

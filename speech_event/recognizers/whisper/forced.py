@@ -11,7 +11,6 @@ prompt's key/value cache.
 said, against which the audio's evidence for a phrase is measured (onnx/grammar_choice.py).
 """
 
-import threading
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -65,29 +64,24 @@ class UnheardScores:
     """Token sequences' ``forced_log_likelihood`` after ``prompt`` with silence for audio: the
     model's prior for a text, high for what it expects when nothing is said (tiny.en writes " you"
     for silence and gives "thank you" -4.4 nats). The silence is encoded, and the prompt run over
-    it, once (Whisper pads every piece to 30 s with zeros: a second of zeros is its empty window):
-    0.35 to 1.1 s for tiny.en and base, kept off an utterance's path by ``prepare`` when a grammar
-    is set; each sequence then costs one decoder call. Those calls are not stoppable: a few decoder
-    calls on a phrase's tokens."""
+    it, once, at the first call that has a sequence to score (Whisper pads every piece to 30 s with
+    zeros: a second of zeros is its empty window): 0.35 to 1.1 s for tiny.en and base, once in the
+    engine's life, in the recognition that first needs it; free speech never pays it. Each sequence
+    then costs one decoder call. Those calls are not stoppable (the caller checks its run after
+    them)."""
 
     def __init__(self, model: WhisperOnnx, prompt: Sequence[int], manifest: WhisperManifest) -> None:
         self._model = model
         self._prompt = list(prompt)
         self._manifest = manifest
         self._silence: Optional[Tuple[Decoding, np.ndarray]] = None
-        self._preparing = threading.Lock()  # a service thread and the worker may both ask
-
-    def prepare(self) -> Tuple[Decoding, np.ndarray]:
-        """The silence's decoding after the prompt, and the prompt's logits: made at the first call."""
-        with self._preparing:
-            if self._silence is None:
-                silence = whisper_log_mel(np.zeros(SAMPLE_RATE, np.float32), self._manifest.mel_bands)
-                decoding = self._model.decoding(silence)
-                self._silence = decoding, decoding(self._prompt)
-            return self._silence
 
     def __call__(self, sequences: Sequence[Sequence[int]]) -> List[float]:
         if not sequences:
             return []
-        decoding, prompted = self.prepare()
+        if self._silence is None:
+            silence = whisper_log_mel(np.zeros(SAMPLE_RATE, np.float32), self._manifest.mel_bands)
+            decoding = self._model.decoding(silence)
+            self._silence = decoding, decoding(self._prompt)
+        decoding, prompted = self._silence
         return score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)

@@ -100,23 +100,19 @@ class WhisperRecognizer:
         self._runs = StoppableRuns()
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
         self._grammars = CompiledGrammars(self._forms)
+        self._grammars.use(grammar)
         self._last_choice: Optional[GrammarChoice] = None
-        self.use_grammar(grammar)
 
     @property
     def sample_rate(self) -> int:
         return SAMPLE_RATE
 
     def check_grammar(self, grammar: Grammar) -> None:
-        """Every phrase must be spelt by the model's tokens in at least one form. The silence the
-        phrases are scored against is encoded here, when set_grammar is called, not at an utterance."""
+        """Every phrase must be spelt by the model's tokens in at least one form."""
         self._grammars.compiled(grammar)
-        self._unheard.prepare()
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
         self._grammars.use(grammar)
-        if grammar is not None:
-            self._unheard.prepare()
 
     def _forms(self, grammar: Grammar) -> PhraseForms:
         """Each phrase's token sequences, one for each form the model can spell."""
@@ -180,9 +176,11 @@ class WhisperRecognizer:
             if phrase not in best or score > best[phrase][0]:
                 best[phrase] = score, tokens
         choice = GrammarChoice(free_text, free.score, {phrase: score for phrase, (score, _) in best.items()})
-        if spelt(free_text) not in best:  # else the decision takes the free text
+        if not choice.transcript(self._threshold).text:  # the words took no phrase: the evidence may
             candidates = choice.preferred_candidates(self._threshold)
             unheard = self._unheard([best[phrase][1] for phrase in candidates])
+            if run.terminate:  # stopped during the calls on silence, which are not stoppable
+                raise RuntimeError(f"{ENGINE}: transcription stopped (RunOptions.terminate)")
             evidence = {phrase: best[phrase][0] - prior for phrase, prior in zip(candidates, unheard)}
             choice = dataclasses.replace(choice, evidence=evidence)
         self._last_choice = choice

@@ -153,6 +153,22 @@ def test_forcing_is_exact_where_the_logits_depend_on_every_token_before(tmp_path
     assert scores == [pytest.approx(_brute_force(model, cross, tokens), abs=1e-5) for tokens in sequences]
 
 
+def test_unheard_scores_are_exact_where_the_logits_depend_on_every_token_before(tmp_path: Path) -> None:
+    """Each sequence scored from the silence's prompt alone, whatever was scored before it: a
+    decoder whose logits follow the whole history would show a shared cache written into."""
+    directory = shutil.copytree(whisper_tones_model_directory(), tmp_path / "model")
+    onnx.save(_history_decoder(seed=5), str(directory / DECODER_FILE))
+    model = WhisperModel(directory)
+    silence = model.encode(whisper_log_mel(np.zeros(RATE, np.float32), MANIFEST.mel_bands))
+    rng = np.random.default_rng(6)
+    sequences = [[int(token) for token in rng.integers(0, len(PIECES), size)] for size in (3, 1, 6, 3)]
+    unheard = UnheardScores(model, PROMPT, MANIFEST)
+    scores = unheard(sequences) + unheard(sequences[::-1])
+    assert len(set(scores)) == len(sequences) and all(np.isfinite(scores))
+    expected = [pytest.approx(_brute_force(model, silence, tokens), abs=1e-5) for tokens in sequences]
+    assert scores == expected + expected[::-1]
+
+
 def test_the_spoken_phrase_outscores_its_near_misses(tones_model: WhisperModel) -> None:
     texts = [" go left", " go lefts", " go lift", " go"]
     spoken, *misses = score_phrases(
