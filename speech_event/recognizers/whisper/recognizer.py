@@ -176,16 +176,18 @@ class WhisperRecognizer:
             if phrase not in best or score > best[phrase][0]:
                 best[phrase] = score, tokens
         choice = GrammarChoice(free_text, free.score, {phrase: score for phrase, (score, _) in best.items()})
-        if not choice.transcript(self._threshold).text:  # the words took no phrase: the evidence may
+        confidence = None if free.no_speech_prob is None else 1.0 - free.no_speech_prob
+        answer = choice.transcript(self._threshold, confidence)
+        if not answer.text:  # the words took no phrase: the evidence may
             candidates = choice.preferred_candidates(self._threshold)
             unheard = self._unheard([best[phrase][1] for phrase in candidates])
             if run.terminate:  # stopped during the calls on silence, which are not stoppable
                 raise RuntimeError(f"{ENGINE}: transcription stopped (RunOptions.terminate)")
             evidence = {phrase: best[phrase][0] - prior for phrase, prior in zip(candidates, unheard)}
             choice = dataclasses.replace(choice, evidence=evidence)
+            answer = choice.transcript(self._threshold, confidence)
         self._last_choice = choice
-        no_speech = free.no_speech_prob
-        return choice.transcript(self._threshold, None if no_speech is None else 1.0 - no_speech)
+        return answer
 
     def _as_written(self, forms: PhraseForms, free_text: str) -> List[Tuple[str, List[int]]]:
         """Each phrase the free text is that phrase misheard (the only phrases the decision may
