@@ -5,13 +5,13 @@ robot. What it publishes must be what it publishes on the fake clock, however bu
 
 The waits are the ROS real-time replay's (harness/schedule.py): the scenario's t = 0 comes just
 after one of the node's health checks, so its checks fall where they do on the scenario clock;
-the events are played at their times; at the end the runner waits for every text and action
+the events are played at their times, those after a call answered late moved later with it
+(ScenarioWallClock); at the end the runner waits for every text and action
 result the node published by then in memory, until a deadline, and says how long it waited for
 what did not come.
 """
 
 import dataclasses
-import time
 from typing import Optional
 
 from harness.catalog import ScenarioEngines
@@ -19,7 +19,7 @@ from harness.memory_runner import SoundDetectionOnTheBus
 from harness.outcome import REAL_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.scenario import Scenario
-from harness.schedule import TEXT_DEADLINE, Schedule, scenario_start
+from harness.schedule import TEXT_DEADLINE, ScenarioWallClock, Schedule
 from harness.timeline import build_timeline
 from speech_event import TEXT_TOPIC
 from speech_event.adapters.executors import ThreadExecutor
@@ -41,13 +41,13 @@ class _RealTime:
         self._schedule = schedule
         self._text_deadline = text_deadline
         self.outcome = Outcome(clock=REAL_TIME)
-        self._start = time.monotonic()
+        self._clock = ScenarioWallClock()
         self._now = 0.0
         bus.subscribe(TEXT_TOPIC, String, self._on_text)
         bus.on_goal_end(self._on_goal_end)
 
     def _scenario_time(self) -> float:
-        return time.monotonic() - self._start
+        return self._clock.now()
 
     def _on_text(self, message: object) -> None:
         text = message.data  # type: ignore[attr-defined]
@@ -59,15 +59,13 @@ class _RealTime:
 
     def begin(self, node_started: float, period: float) -> None:
         """Start the scenario clock just after one of the node's health checks (``node_started``:
-        when its checks count from, on the wall clock)."""
-        start = scenario_start(node_started, time.time(), period)
-        time.sleep(max(0.0, start - time.time()))
-        self._start = time.monotonic()
+        when its checks count from, on the wall clock); waits for it."""
+        self._clock.start(node_started, period)
         self.outcome = Outcome(clock=REAL_TIME)  # what the node said before t = 0 is no part of it
 
     def advance_to(self, when: float) -> None:
         self._now = when
-        time.sleep(max(0.0, self._start + when - time.monotonic()))
+        self._clock.sleep_until(when)
 
     def settle(self, played: int, final: bool) -> None:
         """Only at the end: waiting before an event would shift the events after it."""
@@ -81,9 +79,11 @@ class _RealTime:
 
     def call(self, service: str, request: object) -> None:
         self.outcome.responses.append(int(self.bus.call(service, request).response))  # type: ignore[attr-defined]
+        self._clock.answered(self._now)
 
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
         self.bus.send_goal(ACTION_NAME, goal)
+        self._clock.answered(self._now)
 
 
 def run_in_real_time(scenario: Scenario, text_deadline: Optional[float] = None) -> Outcome:

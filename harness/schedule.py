@@ -33,6 +33,11 @@ ALIGN_MARGIN = 0.5
 # Real time: the node's checks come this much before the scenario's multiples of the period. In
 # sim time (and in memory) a check due at T runs before the events at T; so here too.
 CHECK_LEAD = 0.05
+# Real time: a client's call answered more than this after its time holds the events after it back
+# (ScenarioWallClock.answered). Played late by less, they only come closer together by that much:
+# the scenarios' silences between utterances (2 s or more) stay longer than the pause that ends an
+# utterance (1.5 s).
+LATE_ANSWER = 0.25
 
 
 @dataclass(frozen=True)
@@ -91,6 +96,44 @@ class Due:
             f"at t={now():.3f} s, waited {time.monotonic() - began:.1f} s for {missing} "
             "that the node published by then in memory"
         )
+
+
+class ScenarioWallClock:
+    """The scenario clock of a replay in real time: the wall clock from t = 0 on, moved later by
+    whole health-check periods when a client's call was answered late.
+
+    The robot's clients wait for the node's answer before they go on (the Behaviour Controller sets
+    a grammar, then the robot asks its question), so what follows a call comes after the answer.
+    Played at their old times instead, the events after a late answer came at once: after a
+    set_grammar answered in 3 s, 'yes', the 2 s of silence after it and 'no' reached the node
+    together, one utterance that is no phrase of 'yes|no' (scenarios/trained_yes_no.toml in real
+    time beside a busy machine, with the silence's encoding in set_grammar). Moved by whole periods,
+    the node's checks still fall at multiples of the period on the scenario clock."""
+
+    def __init__(self) -> None:
+        self._start = time.monotonic()
+        self._period = math.inf
+
+    def start(self, node_started: float, period: float) -> None:
+        """Make t = 0 the instant scenario_start gives, and wait for it."""
+        self._period = period
+        self._start = time.monotonic() + (scenario_start(node_started, time.time(), period) - time.time())
+        time.sleep(max(0.0, self._start - time.monotonic()))
+
+    def now(self) -> float:
+        """Now on the scenario clock."""
+        return time.monotonic() - self._start
+
+    def sleep_until(self, when: float) -> None:
+        """Wait until ``when`` on the scenario clock (no wait once it has passed)."""
+        time.sleep(max(0.0, self._start + when - time.monotonic()))
+
+    def answered(self, asked_at: float) -> None:
+        """A call made at ``asked_at`` (scenario clock) has been answered: when more than
+        LATE_ANSWER later, the rest of the scenario moves later by the whole periods that cover it."""
+        late = self.now() - asked_at
+        if late > LATE_ANSWER:
+            self._start += math.ceil(late / self._period) * self._period
 
 
 def scenario_start(node_started: float, now: float, period: float) -> float:

@@ -40,7 +40,7 @@ from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
-from harness.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, Schedule, scenario_start
+from harness.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, ScenarioWallClock, Schedule
 from harness.timeline import SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros
@@ -133,7 +133,7 @@ class RosReplay:
         self._clock = rospy.Publisher(CLOCK_TOPIC, Clock, queue_size=10, latch=True)
         self._outcome = self._new_outcome()
         self._now = 0.0
-        self._wall_start = time.monotonic()
+        self._wall = ScenarioWallClock()  # the scenario clock in real time
         self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
         rospy.Subscriber(PARTIAL_TOPIC, String, self._on_partial, queue_size=None)
         transcript = generated_class(TranscriptMessage._type, "msg")
@@ -148,7 +148,7 @@ class RosReplay:
 
     def _scenario_time(self) -> float:
         """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
-        return time.monotonic() - self._wall_start if self._options.real_time else self._now
+        return self._wall.now() if self._options.real_time else self._now
 
     def _new_outcome(self) -> Outcome:
         return Outcome(clock=REAL_TIME if self._options.real_time else SIM_TIME)
@@ -167,7 +167,7 @@ class RosReplay:
     def advance_to(self, when: float) -> None:
         self._now = when
         if self._options.real_time:
-            time.sleep(max(0.0, self._wall_start + when - time.monotonic()))
+            self._wall.sleep_until(when)
             return
         # The node hears /clock and the signal on connections of their own: a block sent after a
         # clock step may be taken before the step on a busy machine (its arrival time then wrong),
@@ -220,6 +220,8 @@ class RosReplay:
         except (rospy.ROSException, rospy.ServiceException) as problem:
             raise ReplayError(f"calling {service}: {problem}") from None
         self._outcome.responses.append(int(response.response))
+        if self._options.real_time:
+            self._wall.answered(self._now)
 
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
         goal_type = generated_class(RECOGNISE_SPEECH.name + "Goal", "msg")
@@ -240,6 +242,8 @@ class RosReplay:
             lambda: handle.get_comm_state() in (actionlib.CommState.ACTIVE, actionlib.CommState.DONE),
             "the node to accept the action goal",
         )
+        if self._options.real_time:
+            self._wall.answered(self._now)
 
     # -- the node under test ----------------------------------------------------------------------
 
@@ -292,9 +296,7 @@ class RosReplay:
         """Real time: start the scenario clock at one of the node's health-check instants, so its
         checks fall at multiples of the period on the scenario clock, as in sim time. Our node says
         when it started (its checks count from there); for another, when it became ready will do."""
-        start = scenario_start(float(rospy.get_param(START_TIME_PARAM, time.time())), time.time(), period)
-        self._wall_start = time.monotonic() + (start - time.time())
-        time.sleep(max(0.0, self._wall_start - time.monotonic()))
+        self._wall.start(float(rospy.get_param(START_TIME_PARAM, time.time())), period)
         self._outcome = self._new_outcome()  # what the node said before the scenario's t = 0 is no part of it
 
     def _find_node(self) -> str:

@@ -2,6 +2,8 @@
 text that never comes failing the scenario with how long it was waited for. Every scenario played
 so beside a busy core: tests/real/test_scenarios_in_real_time.py."""
 
+import time
+
 import pytest
 
 from harness.outcome import REAL_TIME
@@ -10,6 +12,8 @@ from harness.report import passed, report
 from harness.scenario import parse_scenario
 from harness.schedule import Schedule
 from speech_event.config import SpeechEventConfig
+from speech_event.interfaces.services import RuntimeControl
+from speech_event.messages import SetGrammarResponse
 from speech_event.pipeline.publication import Publication
 
 # Two commands, two seconds apart, and a recognise_speech goal for the second.
@@ -50,3 +54,36 @@ def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_it_was_waite
         " s, waited 0.5 s for 1 text(s) that the node published by then in memory"
     ), gave_up
     assert "      gave up: " + gave_up in report(scenario, outcome)
+
+
+def test_what_follows_a_late_answer_comes_after_it_with_the_scenario_silences_kept(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A set_grammar answered 3 s late: 'yes', 2 s of silence and 'no' after it are two utterances,
+    as in memory. Played at their old times they reached the node at once, one utterance 'yes no'
+    that is no phrase of the grammar, and neither was published."""
+    scenario = parse_scenario(
+        {
+            "name": "a question after a slow set_grammar",
+            "steps": [{"grammar": "yes|no"}, {"say": "yes"}, {"silence": 2.0}, {"say": "no"}],
+            "expect": {"published": ["yes", "no"], "responses": [1]},
+        },
+        "slow.toml",
+        SpeechEventConfig(),
+    )
+    rehearsal = Schedule.of(scenario)
+    monkeypatch.setattr(Schedule, "of", lambda scenario: rehearsal)
+    answer = RuntimeControl.on_set_grammar
+
+    def answered_late(control: RuntimeControl, request: object) -> SetGrammarResponse:
+        response = answer(control, request)
+        time.sleep(3.0)
+        return response
+
+    monkeypatch.setattr(RuntimeControl, "on_set_grammar", answered_late)
+    outcome = run_in_real_time(scenario)
+    assert [message.text for message in outcome.published] == ["yes", "no"]
+    assert outcome.responses == [1] and outcome.gave_up == [] and passed(scenario, outcome)
+    # the scenario clock moved with the answer (by a health-check period): each text a pause after its speech
+    first, second = (message.time for message in outcome.published)
+    assert 1.5 < first < 2.0 + 1.5 < second
