@@ -108,7 +108,9 @@ class ScenarioWallClock:
     set_grammar answered in 3 s, 'yes', the 2 s of silence after it and 'no' reached the node
     together, one utterance that is no phrase of 'yes|no' (scenarios/trained_yes_no.toml in real
     time beside a busy machine, with the silence's encoding in set_grammar). Moved by whole periods,
-    the node's checks still fall at multiples of the period on the scenario clock."""
+    the node's checks still fall at multiples of the period on the scenario clock. A call made in
+    the middle of speech and answered late would so part that speech in two: the scenarios call
+    before speech or in its pauses, as the robot's clients do when they set a grammar or listen."""
 
     def __init__(self) -> None:
         self._start = time.monotonic()
