@@ -338,7 +338,11 @@ class RosTimer:
 
     Not rospy.Timer: it counts its period from when its own thread starts, so a timer set for time
     T fired at T plus however late that thread started (seen in replay: a health check due at 2 s
-    ran after an event at 2.024 s).
+    ran after an event at 2.024 s). Nor rospy.sleep: under /use_sim_time it takes a clock at 0 for
+    no clock yet and counts its whole duration from the first time after it, so a timer set at 0
+    for 1 s, the clock stepped from 0 to 1, waited for 1.5 (a health check of a replay whose
+    soundDetection was down from the start). It waits on rospy's time condition, which /clock
+    notifies (on the wall clock nothing does: the wait is a sleep), and reads the time again.
     """
 
     def __init__(self, when: float, callback: Callable[[], None]) -> None:
@@ -352,14 +356,14 @@ class RosTimer:
         self._cancelled.set()
 
     def _run(self, when: float, callback: Callable[[], None]) -> None:
-        while not self._cancelled.is_set():
-            remaining = when - EARLY - rospy.get_time()
+        ticks = rospy.rostime.get_rostime_cond()
+        while not self._cancelled.is_set() and not rospy.is_shutdown():
+            with ticks:  # read under the lock /clock notifies under: no step is missed
+                remaining = when - EARLY - rospy.get_time()
+                if remaining > 0:
+                    ticks.wait(min(remaining, _LONGEST_WAIT))
             if remaining <= 0:
                 callback()
-                return
-            try:
-                rospy.sleep(min(remaining, _LONGEST_WAIT))  # follows /clock under /use_sim_time
-            except rospy.ROSInterruptException:  # the node is shutting down
                 return
 
 
