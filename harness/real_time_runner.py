@@ -72,7 +72,7 @@ class _RealTime:
         if not final:
             return
         # partial texts are not collected: when one comes decides what it has heard
-        due = dataclasses.replace(self._schedule.due(self._now, played), partials=0)
+        due = dataclasses.replace(self._schedule.due(self._now, played), partials=())
         gave_up = due.wait(self.outcome, self._text_deadline, self._scenario_time)
         if gave_up:
             self.outcome.gave_up.append(gave_up)

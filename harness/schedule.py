@@ -11,7 +11,7 @@ fires on ROS at the time it fires in memory, before the events that come after i
 import math
 import time
 from dataclasses import dataclass
-from typing import Callable, List, Optional
+from typing import Callable, List, Optional, Tuple
 
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome, Published
@@ -25,9 +25,13 @@ from harness.scenario import Scenario
 # with a core busy elsewhere and the rest of the suite beside it: generous, since a text that comes
 # costs only its own time. Once a wait has run out in a scenario, its later waits last
 # TEXT_WAIT_AFTER_MISS: one missing text fails the scenario once, not at every later event.
+# TIMER_SETTLE is all a node that publishes no /diagnostics (another than ours) gets for its timers
+# at a clock step; ours is waited for (harness/ros/runner.py).
 TIMER_SETTLE = 0.03
 TEXT_DEADLINE = 30.0
 TEXT_WAIT_AFTER_MISS = 1.0
+# ROS time is whole nanoseconds: a time sent as a float and read back is within this of it.
+CLOCK_RESOLUTION = 1e-6
 # Real time: how long the harness needs, after the node is ready, before the scenario's t = 0.
 ALIGN_MARGIN = 0.5
 # Real time: the node's checks come this much before the scenario's multiples of the period. In
@@ -59,27 +63,31 @@ class Schedule:
     def due(self, now: float, played: int) -> "Due":
         """What the node had published by ``now`` in memory, with ``played`` events played."""
 
-        def count(items: List[Published]) -> int:
-            return sum(1 for item in items if item.time <= now and item.played <= played)
+        def by_now(items: List[Published]) -> Tuple[str, ...]:
+            return tuple(item.text for item in items if item.time <= now and item.played <= played)
 
         rehearsal = self.rehearsal
-        return Due(count(rehearsal.published), count(rehearsal.results), count(rehearsal.partials))
+        return Due(by_now(rehearsal.published), by_now(rehearsal.results), by_now(rehearsal.partials))
 
 
 @dataclass(frozen=True)
 class Due:
-    """How many texts, action results and partial texts a replay waits for."""
+    """The texts, action results and partial texts a replay waits for, in order.
 
-    texts: int
-    results: int
-    partials: int
+    Each is waited for as itself, not counted: a text the node published that memory did not (a
+    health check that ran late and saw an outage that came after it) must not stand in for one
+    still to come, or the replay would go on, and end, before it came."""
+
+    texts: Tuple[str, ...]
+    results: Tuple[str, ...]
+    partials: Tuple[str, ...]
 
     def missing(self, observed: Outcome) -> str:
         """What of this has not come in ``observed`` ('' when all has), in words."""
         counts = (
-            (self.texts - len(observed.published), "text(s)"),
-            (self.results - len(observed.results), "action result(s)"),
-            (self.partials - len(observed.partials), "partial text(s)"),
+            (_unmatched(self.texts, observed.published), "text(s)"),
+            (_unmatched(self.results, observed.results), "action result(s)"),
+            (_unmatched(self.partials, observed.partials), "partial text(s)"),
         )
         return ", ".join(f"{count} {what}" for count, what in counts if count > 0)
 
@@ -96,6 +104,29 @@ class Due:
             f"at t={now():.3f} s, waited {time.monotonic() - began:.1f} s for {missing} "
             "that the node published by then in memory"
         )
+
+
+def _unmatched(due: Tuple[str, ...], observed: List[Published]) -> int:
+    """How many of ``due`` are not in ``observed`` in their order (others may come between)."""
+    matched = 0
+    for item in observed:
+        if matched < len(due) and item.text == due[matched]:
+            matched += 1
+    return len(due) - matched
+
+
+@dataclass(frozen=True)
+class HealthChecks:
+    """When a node that started at ``started_at`` checks soundDetection: every ``period`` after."""
+
+    started_at: float
+    period: float
+
+    def at(self, when: float) -> bool:
+        """Whether one of the checks falls at ``when``."""
+        periods = (when - self.started_at) / self.period
+        nearest = round(periods)
+        return nearest >= 1 and abs(self.started_at + nearest * self.period - when) <= CLOCK_RESOLUTION
 
 
 class ScenarioWallClock:

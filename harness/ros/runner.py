@@ -2,9 +2,10 @@
 
 By default the runner drives ROS time through /clock (/use_sim_time), so messages and error counts
 are as exact as in memory although processes start and die in real time: before it moves the clock
-on it waits for each real event (the node has received a block, a connection has dropped or been
-made), and after each clock step it gives the node's timers time to run. ``real_time`` plays on the
-wall clock instead. Every process it starts is stopped again, also on failure or Ctrl-C.
+on it waits for each real event (the node has received a block or the clock step, a connection
+has dropped or been made, a health check has published its /diagnostics), so that how busy the
+machine is changes nothing it compares. ``real_time`` plays on the wall clock instead. Every
+process it starts is stopped again, also on failure or Ctrl-C.
 
 The walk over the timeline is the in-memory runner's (harness/player.py); where the clock stops
 besides the events, and what is waited for there, comes from harness/schedule.py, and
@@ -13,6 +14,7 @@ soundDetection is harness/ros/stand_in.py's processes.
 
 import contextlib
 import dataclasses
+import math
 import os
 import shlex
 import socket
@@ -31,6 +33,7 @@ import actionlib
 import rosgraph
 import rospy
 from actionlib_msgs.msg import GoalStatus
+from diagnostic_msgs.msg import DiagnosticArray
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
 
@@ -40,12 +43,21 @@ from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
-from harness.schedule import TEXT_DEADLINE, TEXT_WAIT_AFTER_MISS, TIMER_SETTLE, ScenarioWallClock, Schedule
+from harness.schedule import (
+    CLOCK_RESOLUTION,
+    TEXT_DEADLINE,
+    TEXT_WAIT_AFTER_MISS,
+    TIMER_SETTLE,
+    HealthChecks,
+    ScenarioWallClock,
+    Schedule,
+)
 from harness.timeline import SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros
 from speech_event.config import format_config
 from speech_event.interfaces.action import ACTION_NAME
+from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import (
     RECOGNISE_SPEECH,
@@ -135,6 +147,11 @@ class RosReplay:
         self._now = 0.0
         self._wall = ScenarioWallClock()  # the scenario clock in real time
         self._text_subscriber = rospy.Subscriber(TEXT_TOPIC, String, self._on_text, queue_size=None)
+        # When the node's latest health check ran (ROS time), from the /diagnostics it publishes with each.
+        self._checked_at = -math.inf
+        self._diagnostics = rospy.Subscriber(
+            DIAGNOSTICS_TOPIC, DiagnosticArray, self._on_diagnostics, queue_size=None
+        )
         rospy.Subscriber(PARTIAL_TOPIC, String, self._on_partial, queue_size=None)
         transcript = generated_class(TranscriptMessage._type, "msg")
         rospy.Subscriber(TRANSCRIPT_TOPIC, transcript, self._on_transcript, queue_size=None)
@@ -145,6 +162,9 @@ class RosReplay:
         self._schedule = Schedule(Outcome())  # of the scenario being played
         self._timers_fired: Set[float] = set()  # its stops: when the node's timers fired in memory
         self._node_uri: Optional[str] = None  # the node under test, once it runs
+        # When the node under test checks soundDetection; None: it publishes no /diagnostics
+        # (another node than ours), and the replay gives each of its timers TIMER_SETTLE instead.
+        self._checks: Optional[HealthChecks] = None
 
     def _scenario_time(self) -> float:
         """Now on the scenario clock: the last clock step in sim time, the wall clock in real time."""
@@ -161,6 +181,9 @@ class RosReplay:
 
     def _on_transcript(self, message: Any) -> None:
         self._outcome.transcripts.append(transcript_from_ros(message))
+
+    def _on_diagnostics(self, message: Any) -> None:
+        self._checked_at = max(self._checked_at, message.header.stamp.to_sec())
 
     # -- the walk's runner (harness/player.py): the clock, the services and the action ----------
 
@@ -179,10 +202,24 @@ class RosReplay:
                 lambda: (self._clock_received() or 0) > received,
                 f"the node under test to receive the clock step to {when:.3f} s",
             )
-        # The node's timers run on threads of their own once the step has reached it: only a step
-        # to a time at which one fired in memory needs the wait (most steps only carry a block).
-        if received is None or when in self._timers_fired:
-            time.sleep(TIMER_SETTLE)
+        # The node's timers run on threads of their own once the step has reached it. A health
+        # check asks the master what it finds at the time it runs: one that ran after the events
+        # of a later time (soundDetection's crash) would say what it found then, so the clock
+        # moves on only once the check has published its /diagnostics. The node's other rules
+        # hold however late their timers run (a block that comes after the pause ends the
+        # utterance before it, turn_taking.py), and what they publish is waited for by settle.
+        if received is None or (self._checks is None and when in self._timers_fired):
+            time.sleep(TIMER_SETTLE)  # nothing of the node's to wait for: its start, or another node
+        elif self._checks is not None and self._checks.at(when):
+            try:
+                wait_until(
+                    lambda: self._checked_at >= when - CLOCK_RESOLUTION,
+                    f"the node under test's health check at {when:.3f} s (its /diagnostics)",
+                )
+            except ReplayError as problem:
+                raise ReplayError(
+                    f"{problem}; the node's last lines:\n{self.processes.last_lines('node')}"
+                ) from None
 
     def _clock_received(self) -> Optional[int]:
         """The clock messages the node under test has received; None before it runs or when it
@@ -200,7 +237,7 @@ class RosReplay:
             return
         due = self._schedule.due(self._now, played)
         if self._options.real_time:  # when a partial comes decides what it says: not compared
-            due = dataclasses.replace(due, partials=0)
+            due = dataclasses.replace(due, partials=())
         patience = TEXT_WAIT_AFTER_MISS if self._outcome.gave_up else self._options.text_deadline
         gave_up = due.wait(self._outcome, patience, self._scenario_time)
         if gave_up:
@@ -299,13 +336,27 @@ class RosReplay:
         self._wall.start(float(rospy.get_param(START_TIME_PARAM, time.time())), period)
         self._outcome = self._new_outcome()  # what the node said before the scenario's t = 0 is no part of it
 
-    def _find_node(self) -> str:
+    def _node_name(self) -> str:
+        """The node under test: the one that subscribes to soundDetection's topic besides ours."""
         _, subscribers, _ = self._master.getSystemState()
         nodes = [node for topic, names in subscribers if topic == SIGNAL_TOPIC for node in names]
         others = [node for node in nodes if node != "/speechEventReplay"]
         if not others:
             raise ReplayError(f"no node subscribes to {SIGNAL_TOPIC}")
-        return str(self._master.lookupNode(others[0]))
+        return str(others[0])
+
+    def _find_node(self) -> str:
+        return str(self._master.lookupNode(self._node_name()))
+
+    def _health_checks(self, period: float) -> Optional[HealthChecks]:
+        """When our node checks soundDetection (it says when it started; its checks count from
+        there); None for a node that publishes no /diagnostics."""
+        publishers, _, _ = self._master.getSystemState()
+        node = self._node_name()
+        if not any(topic == DIAGNOSTICS_TOPIC and node in names for topic, names in publishers):
+            return None
+        wait_until(lambda: self._diagnostics.get_num_connections() > 0, "the node's /diagnostics")
+        return HealthChecks(float(rospy.get_param(START_TIME_PARAM, 0.0)), period)
 
     def _node_ready(self) -> bool:
         try:
@@ -355,6 +406,7 @@ class RosReplay:
         if any(isinstance(event, SendGoal) for event in timeline.events):
             self._wait_for_the_action_server()
         self._node_uri = self._find_node()
+        self._checks = self._health_checks(scenario.config.health_check_period)
         stand_ins.come_up_first()
         if self._options.real_time:
             self._align_with_the_node(scenario.config.health_check_period)
@@ -363,6 +415,8 @@ class RosReplay:
         # check between stopping soundDetection and stopping the node is no part of the scenario.
         outcome, self._outcome = self._outcome, self._new_outcome()
         self._node_uri = None
+        self._checks = None
+        self._checked_at = -math.inf
         stand_ins.stop(node)
         return outcome
 
