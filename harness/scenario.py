@@ -5,11 +5,13 @@ not follow it gets a ``ScenarioError`` naming the file, the place in it and what
 """
 
 import argparse
+import dataclasses
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
 
+from fixtures.noises import NOISE_KINDS
 from harness.catalog import FIXTURE_PREFIX, RECOGNIZERS, VOICES
 from speech_event.config import SpeechEventConfig, apply_overrides, load_config, names_a_file
 from speech_event.errors import ConfigError
@@ -29,8 +31,26 @@ class ScenarioError(Exception):
 
 
 @dataclass(frozen=True)
+class Masking:
+    """Noise under a step's speech: ``kind`` (NOISE_KINDS, or a sound file) ``snr_db`` below it."""
+
+    kind: str
+    snr_db: float
+
+
+@dataclass(frozen=True)
 class Say:
     text: str
+    noise: Optional[Masking] = None
+
+
+@dataclass(frozen=True)
+class Play:
+    """A recording (a file next to the scenario, anything soundfile reads), ``gain_db`` louder."""
+
+    path: str
+    gain_db: float = 0.0
+    noise: Optional[Masking] = None
 
 
 @dataclass(frozen=True)
@@ -42,6 +62,7 @@ class Silence:
 class Noise:
     seconds: float
     level_db: float = DEFAULT_NOISE_DB
+    kind: str = "white"  # NOISE_KINDS, or a sound file next to the scenario
 
 
 @dataclass(frozen=True)
@@ -84,7 +105,7 @@ class Listen:
     wait: float
 
 
-Step = Union[Say, Silence, Noise, Malformed, Outage, Enable, Language, SetGrammar, Listen]
+Step = Union[Say, Play, Silence, Noise, Malformed, Outage, Enable, Language, SetGrammar, Listen]
 
 
 @dataclass(frozen=True)
@@ -143,9 +164,10 @@ _TOP_KEYS = (
     "expect",
 )
 _STEP_KEYS = {
-    "say": ("say",),
+    "say": ("say", "noise", "snr_db"),
+    "play": ("play", "gain_db", "noise", "snr_db"),
     "silence": ("silence",),
-    "noise": ("noise", "level_db"),
+    "noise": ("noise", "level_db", "kind"),
     "malformed": ("malformed",),
     "outage": ("outage", "kind"),
     "enable": ("enable",),
@@ -168,17 +190,20 @@ class _Reader:
                 "{}: unknown key '{}'; allowed keys: {}".format(where, unknown[0], ", ".join(allowed))
             )
         self._table = table
-        self._where = where
+        self.where = where
+
+    def has(self, key: str) -> bool:
+        return key in self._table
 
     def get(self, key: str, kind: Union[type, Tuple[type, ...]], default: Any = _REQUIRED) -> Any:
         if key not in self._table:
             if default is _REQUIRED:
-                raise ScenarioError(f"{self._where}: '{key}' is required")
+                raise ScenarioError(f"{self.where}: '{key}' is required")
             return default
         value = self._table[key]
         if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
             names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
-            raise ScenarioError(f"{self._where}: '{key}' = {value!r} must be of type {names}")
+            raise ScenarioError(f"{self.where}: '{key}' = {value!r} must be of type {names}")
         return value
 
     def seconds(self, key: str, allow_zero: bool = False) -> float:
@@ -186,7 +211,7 @@ class _Reader:
         if not (value >= 0 if allow_zero else value > 0) or value > 3600:
             lowest = "0 or more" if allow_zero else "above 0"
             raise ScenarioError(
-                f"{self._where}: '{key}' = {value} must be a number of seconds {lowest} and at most 3600"
+                f"{self.where}: '{key}' = {value} must be a number of seconds {lowest} and at most 3600"
             )
         return value
 
@@ -195,7 +220,7 @@ class _Reader:
         if values is None:
             return None
         if not all(isinstance(value, kind) and not isinstance(value, bool) for value in values):
-            raise ScenarioError(f"{self._where}: '{key}' must be a list of {what}")
+            raise ScenarioError(f"{self.where}: '{key}' must be a list of {what}")
         return tuple(values)
 
     def choice(self, key: str, options: Tuple[str, ...], default: Any = _REQUIRED) -> str:
@@ -203,7 +228,7 @@ class _Reader:
         if value not in options:
             raise ScenarioError(
                 "{}: '{}' = {!r} is not allowed; allowed: {}".format(
-                    self._where, key, value, ", ".join(options)
+                    self.where, key, value, ", ".join(options)
                 )
             )
         return value
@@ -213,6 +238,8 @@ def _step(table: Any, where: str) -> Step:
     if not isinstance(table, dict):
         raise ScenarioError(f'{where}: a step must be a table such as {{ say = "hello" }}')
     kinds = [kind for kind in _STEP_KEYS if kind in table]
+    if "noise" in kinds and ("say" in kinds or "play" in kinds):
+        kinds.remove("noise")  # noise under the speech, not a step of its own
     if len(kinds) != 1:
         raise ScenarioError(
             "{}: a step needs exactly one of {}; it has {}".format(
@@ -222,11 +249,15 @@ def _step(table: Any, where: str) -> Step:
     kind = kinds[0]
     reader = _Reader(table, where, _STEP_KEYS[kind])
     if kind == "say":
-        return Say(reader.get("say", str))
+        return Say(reader.get("say", str), _masking(reader))
+    if kind == "play":
+        gain_db = float(reader.get("gain_db", (int, float), 0.0))
+        return Play(reader.get("play", str), gain_db, _masking(reader))
     if kind == "silence":
         return Silence(reader.seconds("silence"))
     if kind == "noise":
-        return Noise(reader.seconds("noise"), float(reader.get("level_db", (int, float), DEFAULT_NOISE_DB)))
+        level_db = float(reader.get("level_db", (int, float), DEFAULT_NOISE_DB))
+        return Noise(reader.seconds("noise"), level_db, _noise_kind(reader, "kind", "white"))
     if kind == "malformed":
         return Malformed(reader.choice("malformed", MALFORMED_KINDS))
     if kind == "enable":
@@ -238,6 +269,28 @@ def _step(table: Any, where: str) -> Step:
     if kind == "listen":
         return Listen(reader.seconds("listen", allow_zero=True))
     return Outage(reader.seconds("outage"), reader.choice("kind", OUTAGE_KINDS, "shutdown"))
+
+
+def _noise_kind(reader: _Reader, key: str, default: Any = _REQUIRED) -> str:
+    """One of NOISE_KINDS, or a sound file's name (found next to the scenario)."""
+    kind = str(reader.get(key, str, default))
+    if not kind:
+        raise ScenarioError(
+            "{}: '{}' is empty; allowed: {} or a sound file".format(reader.where, key, ", ".join(NOISE_KINDS))
+        )
+    return kind
+
+
+def _masking(reader: _Reader) -> Optional[Masking]:
+    """The noise under a say or play step, and its snr_db (each needs the other)."""
+    if reader.has("noise") != reader.has("snr_db"):
+        raise ScenarioError(f"{reader.where}: 'noise' and 'snr_db' go together: give both or neither")
+    if not reader.has("noise"):
+        return None
+    snr_db = float(reader.get("snr_db", (int, float)))
+    if not -40 <= snr_db <= 100:
+        raise ScenarioError(f"{reader.where}: 'snr_db' = {snr_db} must be a number of dB from -40 to 100")
+    return Masking(_noise_kind(reader, "noise"), snr_db)
 
 
 def parse_scenario(document: Dict[str, Any], source: str, base_config: SpeechEventConfig) -> Scenario:
@@ -322,14 +375,35 @@ def _from_folder(spelling: str, value: object, source: str) -> object:
 
 
 def _next_to(step: Step, source: str) -> Step:
-    """A grammar step's file is found next to the scenario, as its [config] files are."""
-    if (
-        isinstance(step, SetGrammar)
-        and "|" not in step.request
-        and (Path(source).parent / step.request).is_file()
-    ):
-        return SetGrammar(str(Path(source).parent / step.request))
+    """A step's files are found next to the scenario, as its [config] files are: a grammar step's,
+    a recording, a noise file."""
+    folder = Path(source).parent
+    if isinstance(step, SetGrammar) and "|" not in step.request and (folder / step.request).is_file():
+        return SetGrammar(str(folder / step.request))
+    if isinstance(step, Play):
+        path = _file_next_to(step.path, folder, source, "play")
+        return dataclasses.replace(step, path=path, noise=_noise_next_to(step.noise, folder, source))
+    if isinstance(step, Say):
+        return dataclasses.replace(step, noise=_noise_next_to(step.noise, folder, source))
+    if isinstance(step, Noise) and step.kind not in NOISE_KINDS:
+        return dataclasses.replace(step, kind=_file_next_to(step.kind, folder, source, "kind"))
     return step
+
+
+def _noise_next_to(masking: Optional[Masking], folder: Path, source: str) -> Optional[Masking]:
+    if masking is None or masking.kind in NOISE_KINDS:
+        return masking
+    return Masking(_file_next_to(masking.kind, folder, source, "noise"), masking.snr_db)
+
+
+def _file_next_to(name: str, folder: Path, source: str, key: str) -> str:
+    path = folder / name
+    if not path.is_file():
+        allowed = "a sound file next to the scenario" + (
+            f" or one of {', '.join(NOISE_KINDS)}" if key != "play" else ""
+        )
+        raise ScenarioError(f"{source}: {key} = {name!r}: there is no file {path}; allowed: {allowed}")
+    return str(path)
 
 
 def load_scenario(path: Union[str, Path], base_config: SpeechEventConfig) -> Scenario:

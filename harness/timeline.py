@@ -13,7 +13,8 @@ import numpy as np
 
 from fixtures.audio import noise
 from fixtures.malformed import BLOCK_SAMPLES, malformed_message
-from harness.catalog import VOICES
+from fixtures.noises import AudioFileError, at_level, read_audio, under
+from harness.catalog import VOICES, Voice
 from harness.scenario import (
     Enable,
     Language,
@@ -21,8 +22,10 @@ from harness.scenario import (
     Malformed,
     Noise,
     Outage,
+    Play,
     Say,
     Scenario,
+    ScenarioError,
     SetGrammar,
     Silence,
 )
@@ -89,6 +92,23 @@ def _blocks(audio: np.ndarray, start: float, sample_rate: int) -> List[Publish]:
     ]
 
 
+def _audio(step: Union[Say, Play, Noise], voice: Voice, rate: int, rng: np.random.Generator) -> np.ndarray:
+    """What soundDetection hears for a step that makes sound, at ``rate``."""
+    try:
+        if isinstance(step, Noise):
+            if step.kind == "white":  # the samples every scenario had before the other kinds
+                return noise(round(step.seconds * rate), step.level_db, rng)
+            return at_level(step.kind, round(step.seconds * rate), step.level_db, rate, rng)
+        if isinstance(step, Say):
+            speech = voice.speak(step.text, rate)
+        else:
+            gain = np.float32(10.0 ** (step.gain_db / 20.0))
+            speech = np.clip(read_audio(step.path, rate) * gain, -1.0, 1.0)
+        return speech if step.noise is None else under(speech, step.noise.kind, step.noise.snr_db, rate, rng)
+    except AudioFileError as problem:
+        raise ScenarioError(str(problem)) from None
+
+
 def build_timeline(scenario: Scenario) -> Timeline:
     config = scenario.config
     rate = config.sample_rate
@@ -98,11 +118,8 @@ def build_timeline(scenario: Scenario) -> Timeline:
     time = 0.0
     last_deadline = 0.0  # when the last action goal stops waiting for speech
     for step in scenario.steps:
-        if isinstance(step, (Say, Noise)):
-            if isinstance(step, Say):
-                audio = voice.speak(step.text, rate)
-            else:
-                audio = noise(round(step.seconds * rate), step.level_db, rng)
+        if isinstance(step, (Say, Play, Noise)):
+            audio = _audio(step, voice, rate, rng)
             blocks = _blocks(audio, time, rate)
             if scenario.background_noise_db is not None:
                 for block in blocks:

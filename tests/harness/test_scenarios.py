@@ -64,7 +64,27 @@ MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"pu
         ({"name": None}, "s.toml: 'name' is required"),
         (
             {"steps": [{"say": "hi", "silence": 1}]},
-            "s.toml: steps[0]: a step needs exactly one of say, silence, noise, malformed, outage, enable, language, grammar, listen; it has say, silence",
+            "s.toml: steps[0]: a step needs exactly one of say, play, silence, noise, malformed, outage, enable, language, grammar, listen; it has say, silence",
+        ),
+        (
+            {"steps": [{"say": "hi", "noise": "pink"}]},
+            "s.toml: steps[0]: 'noise' and 'snr_db' go together: give both or neither",
+        ),
+        (
+            {"steps": [{"say": "hi", "noise": "pink", "snr_db": 200}]},
+            "s.toml: steps[0]: 'snr_db' = 200.0 must be a number of dB from -40 to 100",
+        ),
+        (
+            {"steps": [{"play": "missing.wav"}]},
+            "s.toml: play = 'missing.wav': there is no file missing.wav; allowed: a sound file next to the scenario",
+        ),
+        (
+            {"steps": [{"noise": 2, "kind": "purple"}]},
+            "s.toml: kind = 'purple': there is no file purple; allowed: a sound file next to the scenario or one of white, pink, brown, babble",
+        ),
+        (
+            {"steps": [{"play": "x.wav", "level_db": 3}]},
+            "s.toml: steps[0]: unknown key 'level_db'; allowed keys: play, gain_db, noise, snr_db",
         ),
         (
             {"steps": [{"silence": -1}]},
