@@ -14,6 +14,7 @@ from harness.memory_runner import run_in_memory
 from harness.scenario import Scenario, ScenarioError, parse_scenario
 from harness.timeline import Publish, build_timeline
 from speech_event.config import SpeechEventConfig
+from speech_event.messages import Float32MultiArray
 from tests.helpers.paths import ROOT
 
 FSDD = ROOT / "tests" / "recordings" / "fsdd"
@@ -27,8 +28,8 @@ def _scenario(steps: List[Dict[str, Any]], folder: Path, seed: int = 0) -> Scena
 
 def _played(scenario: Scenario) -> np.ndarray:
     """What soundDetection publishes, the blocks joined."""
-    blocks = [event.message.data for event in build_timeline(scenario).events if isinstance(event, Publish)]
-    return np.concatenate(blocks)  # type: ignore[arg-type]
+    messages = [event.message for event in build_timeline(scenario).events if isinstance(event, Publish)]
+    return np.concatenate([message.data for message in messages if isinstance(message, Float32MultiArray)])
 
 
 def test_a_recording_is_played_at_the_nodes_rate_in_blocks_gain_db_louder(tmp_path: Path) -> None:
