@@ -20,6 +20,12 @@ Sets:
     their 5 phrases and the 32 commands (the neural engines, which score every sentence); the 5
     librivox sentences against the same grammar (none is in it), and against no grammar (each
     must be published).
+(c) with ``--people TAKES``: people saying digits (tests/recordings/fsdd: george, jackson, lucas;
+    TAKES recordings of each digit, 1 to 5), per speaker, the word alone and with 0.2 and 1 s of
+    room noise (pink, -50 dBFS) before and after it, as soundDetection sends it: against a digits
+    grammar (exact / another digit / rejected), the robot's commands and yes|no (a digit is
+    outside both), and no grammar (the digit written, in words or figures); then 30 s of pink
+    noise and of babble alone at -30 dBFS against the commands (nothing may be published).
 
 Per engine and set: commands published exactly / rejected / as another command; out-of-grammar
 speech published as a phrase; the ratio the engine judged by (nats: the most likely phrase
@@ -38,6 +44,7 @@ import contextlib
 import json
 import statistics
 import time
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, TextIO, Tuple, runtime_checkable
@@ -47,6 +54,7 @@ import numpy as np
 from fixtures import recordings
 from fixtures.festival import VOICES as FESTIVAL_VOICES
 from fixtures.festival import festival_voice
+from fixtures.noises import at_level, read_audio
 from fixtures.tts import speak_tts
 from harness.catalog import BASE, TINY_EN, ScenarioEngines
 from speech_event.adapters.executors import ClockExecutor
@@ -280,6 +288,73 @@ def cards_grammar(engine: str) -> str:
     return "|".join([recording.text for recording in recordings.cards()] + lines(COMMANDS))
 
 
+FSDD = ROOT / "tests" / "recordings" / "fsdd"
+SPEAKERS = ("george", "jackson", "lucas")
+DIGITS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine")
+MARGINS = (0.0, 0.2, 1.0)
+ROOM_DB = -50.0
+NOISE_ALONE_DB = -30.0
+
+
+def people(speaker: str, takes: int, margin: float) -> List[Tuple[str, np.ndarray]]:
+    """Each digit by ``speaker`` (``takes`` recordings of it) at RATE, ``margin`` seconds of room
+    noise before and after, drawn from a seed of the recording's own."""
+    said = []
+    for digit, word in enumerate(DIGITS):
+        for take in range(takes):
+            name = f"{digit}_{speaker}_{take}"
+            speech = read_audio(FSDD / f"{name}.wav", RATE)
+            rng = np.random.default_rng(zlib.crc32(name.encode()))
+            room = [at_level("pink", round(margin * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
+            said.append((word, np.concatenate([room[0], speech, room[1]])))
+    return said
+
+
+def as_digit(text: str) -> str:
+    """A free text as a digit's word when it is one digit, in words or figures ('Three.', '3')."""
+    word = "".join(letter for letter in text.lower() if letter.isalnum())
+    return DIGITS[int(word)] if word.isdigit() and len(word) == 1 else word
+
+
+def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
+    """Set (c)."""
+    recognizer, quantization = ENGINES[name]
+    config = SpeechEventConfig(
+        speculative_recognition=False,
+        partial_period=0.0,
+        publish_unrecognized=True,
+        quantization=quantization or "none",
+    )
+    grammars = (
+        ("digits", "|".join(DIGITS), True),
+        ("commands", str(COMMANDS), False),
+        ("yes|no", "yes|no", False),
+    )
+    print(f"{name}, people saying digits ({takes} of each by each speaker):")
+    with ScenarioEngines(recognizer, config, simulated=True) as engines:
+        run = NodeRun(engines.build(), config)
+        for label, grammar, inside in grammars:
+            run.use_grammar(grammar)
+            for margin in MARGINS:
+                for speaker in SPEAKERS:
+                    said = [
+                        (word if inside else None, audio) for word, audio in people(speaker, takes, margin)
+                    ]
+                    tally = judge(run, said, record, f"{name} {label} {speaker} {margin}")
+                    report(f"(c) {label}, {speaker}, margin {margin} s", tally)
+        run.use_grammar("")
+        for margin in MARGINS:
+            for speaker in SPEAKERS:
+                tally = Tally()
+                for word, audio in people(speaker, takes, margin):
+                    count(tally, word, as_digit(run.say(audio)), None)
+                report(f"(c) no grammar: the digit written, {speaker}, margin {margin} s", tally)
+        run.use_grammar(str(COMMANDS))
+        for kind in ("pink", "babble"):
+            noise = at_level(kind, 30 * RATE, NOISE_ALONE_DB, RATE, np.random.default_rng(0))
+            report(f"(c) {kind} noise alone, 30 s, against the commands", judge(run, [(None, noise)]))
+
+
 def run_engine(name: str, voices: Sequence[str], record: Optional[TextIO]) -> None:
     recognizer, quantization = ENGINES[name]
     config = SpeechEventConfig(
@@ -312,6 +387,13 @@ def main() -> None:
     parser.add_argument(
         "--voices", nargs="*", choices=sorted(VOICES), default=list(VOICES), help="none: the recordings only"
     )
+    parser.add_argument(
+        "--people",
+        type=int,
+        choices=range(1, 6),
+        metavar="TAKES",
+        help="set (c), TAKES of each digit (1 to 5)",
+    )
     parser.add_argument("--record", type=Path, help="write each utterance's decision here (JSON lines)")
     parser.add_argument(
         "--replay", type=Path, help="judge a --record file's decisions again; nothing is decoded"
@@ -323,6 +405,8 @@ def main() -> None:
     with contextlib.ExitStack() as stack:
         record = stack.enter_context(open(arguments.record, "w")) if arguments.record else None
         for name in arguments.engines:
+            if arguments.people:
+                run_people(name, arguments.people, record)
             run_engine(name, arguments.voices, record)
 
 

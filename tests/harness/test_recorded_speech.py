@@ -88,6 +88,7 @@ def test_coloured_noise_has_the_spectrum_of_its_colour(kind: str, slope: float) 
     fitted = np.polyfit(np.log10(frequencies[band]), np.log10(power[band]), 1)[0]
     assert fitted == pytest.approx(slope, abs=0.05)  # power ~ 1 / f ** -slope
     assert rms(noise) == pytest.approx(1.0)
+    assert noise_like(kind, 0, RATE, np.random.default_rng(0)).size == 0
 
 
 def test_a_noise_step_plays_a_file_looped_at_its_level(tmp_path: Path) -> None:
