@@ -108,14 +108,36 @@ def test_tokens_round_trip_and_a_broken_file_is_named(tmp_path: Path) -> None:
     assert str(error.value) == f"{path}: not a tokens file (one token's bytes in base64 a line)"
 
 
-def test_the_features_are_a_30_s_window_normalised_as_whisper_does() -> None:
-    tone = (0.5 * np.sin(2 * np.pi * 1000 * np.arange(RATE) / RATE)).astype(np.float32)
+def _whisper_log_mel(audio: np.ndarray, mel_bands: int) -> np.ndarray:
+    """whisper.log_mel_spectrogram(audio, padding=N_SAMPLES)[:, :3000] step by step as whisper writes
+    it, in numpy: 30 s of silence after the audio, torch.stft's frames (centred, reflected, periodic
+    Hann), the last dropped, the mel filters, log10 clamped, floored 8 under the maximum."""
+    padded = np.concatenate([audio.astype(np.float64), np.zeros(30 * RATE)])
+    signal = np.pad(padded, 200, mode="reflect")
+    frames = 1 + (signal.size - 400) // 160
+    window = np.hanning(401)[:-1]  # periodic
+    stft = np.stack([np.fft.rfft(signal[i * 160 : i * 160 + 400] * window) for i in range(frames)], axis=1)
+    power = np.abs(stft[:, :-1]) ** 2
+    log_spec = np.log10(np.clip(mel_filterbank(RATE, 400, mel_bands).astype(np.float32) @ power, 1e-10, None))
+    return ((np.maximum(log_spec, log_spec.max() - 8.0) + 4.0) / 4.0)[:, :3000]
+
+
+def test_the_features_are_whispers_log_mel_of_the_audio_and_30_s_of_silence() -> None:
+    # 1 s of a 1 kHz tone and 77 samples more. After the audio's frames the window is the
+    # silence's floor, 8 decades under the maximum (whisper.transcribe v20230307 to v20231117), not
+    # the zeros its pad_or_trim of the mel gives since v20240927, as faster-whisper's does
+    # (docs/engines.md: beside faster-whisper)
+    samples = RATE + 77
+    tone = (0.5 * np.sin(2 * np.pi * 1000 * np.arange(samples) / RATE)).astype(np.float32)
     mel = whisper_log_mel(tone, 80)
     assert mel.shape == (80, 3000)
+    np.testing.assert_allclose(mel, _whisper_log_mel(tone, 80), rtol=0, atol=1e-6)
     assert mel.max() - mel.min() == pytest.approx(2.0)  # floored 8 decades (/4) under the maximum
     peak_band = int(np.argmax(mel[:, 50]))
     assert peak_band == int(np.argmax(mel_filterbank(RATE, 400, 80)[:, 1000 * 400 // RATE]))
     assert np.all(mel[:, 150:] == mel.min())  # after the second of tone: the padding's silence
+    silence = whisper_log_mel(np.zeros(RATE // 2, np.float32), 80)  # log10(1e-10), (-10 + 4) / 4
+    assert np.all(silence == -1.5)
 
 
 def test_long_audio_is_cut_at_its_quietest_point_after_20_s() -> None:
