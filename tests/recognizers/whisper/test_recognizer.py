@@ -119,7 +119,7 @@ def _whisper_log_mel(audio: np.ndarray, mel_bands: int) -> np.ndarray:
     stft = np.stack([np.fft.rfft(signal[i * 160 : i * 160 + 400] * window) for i in range(frames)], axis=1)
     power = np.abs(stft[:, :-1]) ** 2
     log_spec = np.log10(np.clip(mel_filterbank(RATE, 400, mel_bands).astype(np.float32) @ power, 1e-10, None))
-    return ((np.maximum(log_spec, log_spec.max() - 8.0) + 4.0) / 4.0)[:, :3000]
+    return np.asarray(((np.maximum(log_spec, log_spec.max() - 8.0) + 4.0) / 4.0)[:, :3000])
 
 
 def test_the_features_are_whispers_log_mel_of_the_audio_and_30_s_of_silence() -> None:
