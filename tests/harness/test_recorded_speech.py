@@ -2,6 +2,8 @@
 ``play = "file.wav"`` at any rate, ``gain_db`` louder; noise of a kind at ``snr_db`` under a say or
 play step, or alone; the same samples on every run."""
 
+import hashlib
+import re
 from pathlib import Path
 from typing import Any, Dict, List
 
@@ -119,3 +121,33 @@ def test_a_scenario_of_recordings_of_people_runs_in_memory(tmp_path: Path) -> No
     }
     scenario = parse_scenario(document, str(tmp_path / "s.toml"), SpeechEventConfig())
     assert run_in_memory(scenario).published == []
+
+
+def _speech_commands_partition(file_name: str) -> str:
+    """The partition Speech Commands' own which_set (10 % validation, 10 % testing) puts a clip
+    in: by a hash of its speaker, so all of a speaker's clips are in one."""
+    speaker = re.sub(r"_nohash_.*$", "", file_name)
+    most = 2**27 - 1
+    share = (int(hashlib.sha1(speaker.encode()).hexdigest(), 16) % (most + 1)) * (100.0 / most)
+    return "validation" if share < 10 else "testing" if share < 20 else "training"
+
+
+def test_no_held_out_recording_is_in_the_suite() -> None:
+    """FSDD's nicolas, theo and yweweler and Speech Commands' test files judge the project's grammar
+    decisions: none of them may be committed (tests/recordings/*/README.md)."""
+    files = [path for path in (ROOT / "tests" / "recordings").rglob("*") if path.suffix == ".wav"]
+    assert {path.name.split("_")[1] for path in files if path.parent.name == "fsdd"} == {
+        "george",
+        "jackson",
+        "lucas",
+    }
+    commands = [path for path in files if "speech_commands" in path.parts]
+    assert len(commands) == 125
+    rows = (ROOT / "tests" / "recordings" / "speech_commands" / "SOURCE.txt").read_text().splitlines()
+    listed = {row.split("\t")[0]: row.split("\t")[2] for row in rows if row.count("\t") == 3}
+    partitions = {
+        f"{path.parent.name}/{path.name}": _speech_commands_partition(path.name) for path in commands
+    }
+    assert partitions == {name: listed[name] for name in partitions}  # each as SOURCE.txt says
+    assert set(partitions.values()) == {"training", "validation"}
+    assert {soundfile.info(str(path)).samplerate for path in commands} == {16000}
