@@ -24,8 +24,11 @@ Sets:
     TAKES recordings of each digit, 1 to 5), per speaker, the word alone and with 0.2 and 1 s of
     room noise (pink, -50 dBFS) before and after it, as soundDetection sends it: against a digits
     grammar (exact / another digit / rejected), the robot's commands and yes|no (a digit is
-    outside both), and no grammar (the digit written, in words or figures); then 30 s of pink
-    noise and of babble alone at -30 dBFS against the commands (nothing may be published).
+    outside both), and no grammar (the digit written, in words or figures); people saying single
+    words (tests/recordings/speech_commands, 16 kHz, 32 speakers) with the same margins against the
+    commands and yes|no: 'yes', 'no', 'stop' exact, the other words ('left', 'go', 'up', 'bird',
+    ...) published as nothing; then 30 s of pink noise and of babble alone at -30 dBFS against the
+    commands (nothing may be published).
 
 Per engine and set: commands published exactly / rejected / as another command; out-of-grammar
 speech published as a phrase; the ratio the engine judged by (nats: the most likely phrase
@@ -310,6 +313,22 @@ def people(speaker: str, takes: int, margin: float) -> List[Tuple[str, np.ndarra
     return said
 
 
+SPEECH_COMMANDS = ROOT / "tests" / "recordings" / "speech_commands"
+
+
+def people_words(margin: float, phrases: Sequence[str]) -> List[Sample]:
+    """Each Speech Commands clip, ``margin`` seconds of room noise before and after: a word that is
+    one of ``phrases`` expected as itself, any other outside the grammar."""
+    said: List[Sample] = []
+    for path in sorted(SPEECH_COMMANDS.glob("*/*.wav")):
+        speech = read_audio(path, RATE)
+        rng = np.random.default_rng(zlib.crc32(path.name.encode()))
+        room = [at_level("pink", round(margin * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
+        word = path.parent.name
+        said.append((word if word in phrases else None, np.concatenate([room[0], speech, room[1]])))
+    return said
+
+
 def as_digit(text: str) -> str:
     """A free text as a digit's word when it is one digit, in words or figures ('Three.', '3')."""
     word = "".join(letter for letter in text.lower() if letter.isalnum())
@@ -349,6 +368,14 @@ def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
                 for word, audio in people(speaker, takes, margin):
                     count(tally, word, as_digit(run.say(audio)), None)
                 report(f"(c) no grammar: the digit written, {speaker}, margin {margin} s", tally)
+        for label, grammar, phrases in (
+            ("commands", str(COMMANDS), lines(COMMANDS)),
+            ("yes|no", "yes|no", ["yes", "no"]),
+        ):
+            run.use_grammar(grammar)
+            for margin in MARGINS:
+                tally = judge(run, people_words(margin, phrases), record, f"{name} words {label} {margin}")
+                report(f"(c) single words against {label}, margin {margin} s", tally)
         run.use_grammar(str(COMMANDS))
         for kind in ("pink", "babble"):
             noise = at_level(kind, 30 * RATE, NOISE_ALONE_DB, RATE, np.random.default_rng(0))
