@@ -299,6 +299,26 @@ ROOM_DB = -50.0
 NOISE_ALONE_DB = -30.0
 
 
+def engine_config(name: str) -> Tuple[str, SpeechEventConfig]:
+    """The recognizer of ``name`` and the node's configuration for it: every utterance answers
+    (publish_unrecognized), no speculation nor partial results (the texts are the same)."""
+    recognizer, quantization = ENGINES[name]
+    config = SpeechEventConfig(
+        speculative_recognition=False,
+        partial_period=0.0,
+        publish_unrecognized=True,
+        quantization=quantization or "none",
+    )
+    return recognizer, config
+
+
+def in_the_room(speech: np.ndarray, margin: float, seed_name: str) -> np.ndarray:
+    """``speech`` with ``margin`` seconds of room noise before and after, from a seed of its own."""
+    rng = np.random.default_rng(zlib.crc32(seed_name.encode()))
+    room = [at_level("pink", round(margin * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
+    return np.concatenate([room[0], speech, room[1]])
+
+
 def people(speaker: str, takes: int, margin: float) -> List[Tuple[str, np.ndarray]]:
     """Each digit by ``speaker`` (``takes`` recordings of it) at RATE, ``margin`` seconds of room
     noise before and after, drawn from a seed of the recording's own."""
@@ -306,10 +326,7 @@ def people(speaker: str, takes: int, margin: float) -> List[Tuple[str, np.ndarra
     for digit, word in enumerate(DIGITS):
         for take in range(takes):
             name = f"{digit}_{speaker}_{take}"
-            speech = read_audio(FSDD / f"{name}.wav", RATE)
-            rng = np.random.default_rng(zlib.crc32(name.encode()))
-            room = [at_level("pink", round(margin * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
-            said.append((word, np.concatenate([room[0], speech, room[1]])))
+            said.append((word, in_the_room(read_audio(FSDD / f"{name}.wav", RATE), margin, name)))
     return said
 
 
@@ -321,11 +338,9 @@ def people_words(margin: float, phrases: Sequence[str]) -> List[Sample]:
     one of ``phrases`` expected as itself, any other outside the grammar."""
     said: List[Sample] = []
     for path in sorted(SPEECH_COMMANDS.glob("*/*.wav")):
-        speech = read_audio(path, RATE)
-        rng = np.random.default_rng(zlib.crc32(path.name.encode()))
-        room = [at_level("pink", round(margin * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
         word = path.parent.name
-        said.append((word if word in phrases else None, np.concatenate([room[0], speech, room[1]])))
+        audio = in_the_room(read_audio(path, RATE), margin, path.name)
+        said.append((word if word in phrases else None, audio))
     return said
 
 
@@ -337,13 +352,7 @@ def as_digit(text: str) -> str:
 
 def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
     """Set (c)."""
-    recognizer, quantization = ENGINES[name]
-    config = SpeechEventConfig(
-        speculative_recognition=False,
-        partial_period=0.0,
-        publish_unrecognized=True,
-        quantization=quantization or "none",
-    )
+    recognizer, config = engine_config(name)
     grammars = (
         ("digits", "|".join(DIGITS), True),
         ("commands", str(COMMANDS), False),
@@ -383,13 +392,7 @@ def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
 
 
 def run_engine(name: str, voices: Sequence[str], record: Optional[TextIO]) -> None:
-    recognizer, quantization = ENGINES[name]
-    config = SpeechEventConfig(
-        speculative_recognition=False,
-        partial_period=0.0,
-        publish_unrecognized=True,
-        quantization=quantization or "none",
-    )
+    recognizer, config = engine_config(name)
     print(f"{name}:")
     with ScenarioEngines(recognizer, config, simulated=True) as engines:
         run = NodeRun(engines.build(), config)
