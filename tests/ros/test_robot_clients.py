@@ -139,16 +139,18 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
         # client's own callback may miss the first and the last: actionlib's SimpleActionClient
         # drops a feedback that comes before send_goal has stored its goal handle (the 0, sent as
         # the goal is accepted, on a busy machine: "a goal handle that we're not tracking") and one
-        # that comes after the result (another topic, another connection).
+        # that comes after the result (another topic, another connection). The topic carries every
+        # goal's feedback (the first goal's 100 came after the connection once): this goal's, by id.
         progress: List[int] = []
-        published: List[int] = []
+        sent: List[Tuple[str, int]] = []
         feedback = rospy.Subscriber(
             f"{ACTION}/feedback",
             msg.recogniseSpeechActionFeedback,
-            lambda m: published.append(m.feedback.progress),
+            lambda m: sent.append((m.status.goal_id.id, m.feedback.progress)),
         )
         wait_for(lambda: feedback.get_num_connections() > 0, "the feedback topic")
         client.send_goal(msg.recogniseSpeechGoal(wait=5.0), feedback_cb=lambda f: progress.append(f.progress))
+        goal_id = client.gh.comm_state_machine.action_goal.goal_id.id
         wait_for(lambda: client.get_state() == GoalStatus.ACTIVE, "the goal to be accepted")
         wait_for(lambda: 10 in progress, "the feedback of the first tenth of the wait")
         speech = speak_tones("yego", 48000)
@@ -157,8 +159,9 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
             rospy.sleep(4096 / 48000)
         assert client.wait_for_result(rospy.Duration(30))
         assert (client.get_state(), client.get_result().transcription) == (GoalStatus.SUCCEEDED, "yego")
-        wait_for(lambda: bool(published) and published[-1] == 100, "the last feedback")
+        wait_for(lambda: (goal_id, 100) in sent, "the last feedback")
         feedback.unregister()
+        published = [step for sent_for, step in sent if sent_for == goal_id]
         assert published[:2] == [0, 10] and published == sorted(published)
         assert 10 in progress and progress == [step for step in published if step in progress]
     finally:
