@@ -29,8 +29,8 @@ from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
 MODELS: Dict[str, TrainedWhisper] = {"tiny.en": TINY_EN, "base": BASE}
 SCHEMES: Dict[str, Int8Scheme] = {
-    "signed, per tensor (until 2026-11-28)": SIGNED_PER_TENSOR,
-    "unsigned, per channel (export --int8)": Int8Scheme(),
+    "7-bit, per channel (export --int8)": Int8Scheme(),
+    "8-bit, per tensor (until 2026-11-28)": SIGNED_PER_TENSOR,
 }
 FP32_FILES = (
     "config.json",

@@ -10,12 +10,14 @@ table a product reads too (below). Products inside a control-flow node's branche
 (optimum's merged Whisper decoder).
 bench/asr.py measures what it gains and what it changes.
 
-The weights are unsigned 8-bit with a scale per output column (Int8Scheme): the same results on
-every x86-64 CPU. onnxruntime picks its int8 kernels by CPU, and with signed weights (onnxruntime's
-default) AVX2's kernel adds pairs of products in 16 bits, which saturate: measured under qemu as a
-Haswell (bench/int8_cpus.py), a random Whisper's logits moved 5x as far from fp32 as on an AVX-512
-VNNI CPU, and per-channel signed weights 27x. Unsigned weights take a kernel that does not
-saturate, and give the same logits on both.
+The weights are signed 7-bit numbers with a scale per output column (Int8Scheme): the same
+results on every x86-64 CPU, at int8's speed. onnxruntime picks its int8 kernels by CPU, and AVX2's
+kernel for unsigned activations by signed weights adds pairs of products in 16 bits, which saturate
+with 8-bit weights (255 x 127 x 2 > 32767) but not with 7-bit ones (255 x 64 x 2 < 32767): measured
+under qemu as a Haswell (bench/int8_cpus.py), a random Whisper's logits moved 5x as far from fp32
+as on an AVX-512 VNNI CPU with onnxruntime's default (8-bit, one scale a matrix), 27x with 8-bit
+per-column scales, and exactly as far with 7-bit ones. Unsigned weights do not saturate either,
+but take a slower kernel: trained tiny.en decoded 1.36x as long on this CPU.
 
 A table that is both a product's weight and gathered from (Whisper's tied token embedding: the
 logits' weight and the tokens' lookup) is gathered from its int8 version too, then dequantized, so
@@ -68,12 +70,13 @@ def int8_name(name: str) -> str:
 class Int8Scheme:
     """How the products' weights are stored in 8 bits (the module's docstring says why the default)."""
 
-    unsigned: bool = True
+    unsigned: bool = False
     per_channel: bool = True  # a scale and zero point per output column, not one for the whole matrix
+    seven_bits: bool = True  # onnxruntime's reduce_range: signed weights in [-64, 64]
 
 
 # What export --int8 wrote before 2026-11-28, onnxruntime's default: AVX2's kernel saturates on it.
-SIGNED_PER_TENSOR = Int8Scheme(unsigned=False, per_channel=False)
+SIGNED_PER_TENSOR = Int8Scheme(unsigned=False, per_channel=False, seven_bits=False)
 
 
 def quantize_directory(directory: Path, scheme: Int8Scheme = Int8Scheme()) -> List[Path]:
@@ -98,6 +101,7 @@ def quantize_directory(directory: Path, scheme: Int8Scheme = Int8Scheme()) -> Li
                     op_types_to_quantize=["MatMul"],
                     weight_type=QuantType.QUInt8 if scheme.unsigned else QuantType.QInt8,
                     per_channel=scheme.per_channel,
+                    reduce_range=scheme.seven_bits,
                     # optimum's merged Whisper decoder keeps its every product by a weight inside its
                     # If node's two branches (with and without the cache), which the quantizer leaves
                     # alone unless told to go into them

@@ -168,10 +168,10 @@ def test_export_whisper_int8_writes_the_int8_files_the_engine_runs(
     # Which token wins a near-tie of a random model's int8 logits is the CPU's kernels' to decide
     # (an AVX2 CPU and an AVX-512 one chose differently), so the tokens are not compared with fp32's:
     # along fp32's text, int8's logits are off by int8's error, far less than their spread, on every
-    # x86-64 CPU (1.7 % of the largest here and under qemu as a Haswell; the signed weights that AVX2
+    # x86-64 CPU (3.3 % of the largest here and under qemu as a Haswell; the 8-bit weights that AVX2
     # saturates on: 13 % there, bench/int8_cpus.py), and not exactly fp32's (int8 ran)
     exact, quantized = _teacher_forced(fp32, mel, prompt, text), _teacher_forced(int8, mel, prompt, text)
-    assert 0 < np.abs(quantized - exact).max() < 0.03 * np.abs(exact).max()
+    assert 0 < np.abs(quantized - exact).max() < 0.06 * np.abs(exact).max()
     # the engine, told int8, decodes those graphs greedily: its tokens are the reference's, on this CPU
     engine = WhisperRecognizer(out, "english", Runtime(int8=True))
     assert engine.decode(audio).tokens == whisper_greedy(int8.decoding(mel), prompt, manifest).tokens

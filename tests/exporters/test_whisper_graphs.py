@@ -188,7 +188,8 @@ def test_the_int8_decoder_holds_the_token_embedding_once_in_int8_and_gathers_its
     table = TIED_EMBEDDING + "_quantized"
     assert _embeddings(int8) == [table]
     tensors = {tensor.name: numpy_helper.to_array(tensor) for tensor in int8.graph.initializer}
-    assert tensors[table].dtype == np.uint8  # unsigned, a scale a column: exporters/quantize.py
+    assert tensors[table].dtype == np.int8  # 7 bits, a scale a column: exporters/quantize.py
+    assert tensors[table].min() >= -64 and tensors[table].max() <= 64  # 255 x 64 x 2 < 2 ** 15
     scale, zero_point = tensors[TIED_EMBEDDING + "_scale"], tensors[TIED_EMBEDDING + "_zero_point"]
     assert scale.shape == zero_point.shape == (tensors[table].shape[1],)
     readers = sorted(node.op_type for node in int8.graph.node if table in node.input)
