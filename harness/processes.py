@@ -10,10 +10,11 @@ import os
 import signal
 import socket
 import subprocess
+import threading
 import time
 from contextlib import closing
 from pathlib import Path
-from typing import Callable, Dict, List, Sequence, Set
+from typing import Callable, Dict, Iterator, List, Sequence, Set
 
 # How long a replay waits for one real event (a message received, a connection made or dropped).
 EVENT_TIMEOUT = 20.0
@@ -57,6 +58,34 @@ def descendants(pid: int) -> Set[int]:
     return found
 
 
+@contextlib.contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Ctrl-C or SIGTERM (harness/cli.py) waits until a process just started is on the list that
+    stop_all stops: one that came between the fork and the list left the child running, unknown
+    to it (a node outlived an interrupted replay under load). Python's handlers only: the child
+    execs with the default ones. In the main thread, where handlers live; elsewhere as it was."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    arrived: List[int] = []
+
+    def note(number: int, frame: object) -> None:
+        arrived.append(number)
+
+    handlers = {number: signal.signal(number, note) for number in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for number, handler in handlers.items():
+            signal.signal(number, handler)
+        for first in arrived[:1]:
+            handler = handlers[signal.Signals(first)]
+            if callable(handler):
+                handler(first, None)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(first)
+
+
 def free_port() -> int:
     """A TCP port on loopback that nothing listens on now."""
     with closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as probe:
@@ -74,7 +103,7 @@ class Processes:
 
     def start(self, name: str, command: Sequence[str], talk: bool = False) -> "subprocess.Popen[str]":
         # The child holds its own copy of the log's descriptor; ours closes once it has started.
-        with open(self.log(name), "a") as log:
+        with open(self.log(name), "a") as log, _interrupts_deferred():
             try:
                 process = subprocess.Popen(
                     list(command),
@@ -87,7 +116,7 @@ class Processes:
                 )
             except OSError as problem:  # no such executable, not executable
                 raise ReplayError(f"cannot start the {name} ({command[0]}): {problem.strerror}") from None
-        self._started.append(process)
+            self._started.append(process)
         return process
 
     def log(self, name: str) -> Path:
