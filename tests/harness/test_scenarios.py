@@ -6,6 +6,7 @@ from typing import Any, Dict, List
 
 import pytest
 
+from harness.cli import COMMANDS, base_config, build_parser, demo_engine
 from harness.memory_runner import run_in_memory
 from harness.outcome import REAL_TIME, SIM_TIME, Published
 from harness.report import passed, report
@@ -239,15 +240,28 @@ def test_a_scenario_whose_package_is_not_installed_says_what_to_install_and_the_
 
 
 def test_the_demo_turns_real_speech_into_text_on_embedded_defaults() -> None:
+    """Whisper tiny.en int8 (the test extra's wheel) within the robot's commands: the engine that
+    published no other word as a command on recordings of people (docs/grammar.md#people)."""
     result = _harness("demo", "go to the kitchen")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[:2] == [
         "soundDetection says 'go to the kitchen' (tts voice, 48000 Hz, 4096-sample blocks)",
-        f"speechEvent transcribes with auto, grammar {ROOT / 'harness' / 'data' / 'robot_commands.txt'}",
+        "speechEvent transcribes with whisper-tiny.en (int8), "
+        f"grammar {ROOT / 'harness' / 'data' / 'robot_commands.txt'}",
     ]
     assert len(lines) == 3
     assert lines[2].startswith("/speechEvent/text at t=")
+    assert lines[2].endswith(" s: 'go to the kitchen'")
+
+
+def test_the_demo_on_pocketsphinx_takes_the_robots_commands_too() -> None:
+    result = _harness("demo", "--recognizer", "pocketsphinx", "go to the kitchen")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[1] == (
+        f"speechEvent transcribes with pocketsphinx, grammar {ROOT / 'harness' / 'data' / 'robot_commands.txt'}"
+    )
     assert lines[2].endswith(" s: 'go to the kitchen'")
 
 
@@ -364,3 +378,26 @@ def test_in_real_time_an_error_may_come_before_a_text_still_being_recognized_but
     assert "--- expected published texts\n      +++ published texts\n" in report(scenario, wrong)
     twice = dataclasses.replace(wrong, published=[stop, error, error])
     assert not passed(scenario, twice)
+
+
+@pytest.mark.parametrize(
+    ("options", "lines", "engine", "quantization", "grammar"),
+    [
+        ([], [], "whisper-tiny.en", "int8", str(COMMANDS)),
+        (["--recognizer", "pocketsphinx"], [], "pocketsphinx", "none", str(COMMANDS)),
+        (["--grammar", ""], [], "whisper-tiny.en", "int8", ""),
+        (["--recognizer", "fake"], [], "fake", "none", ""),
+        ([], ["en_model_path /models/en"], "auto", "none", ""),  # the user's model, as the file says
+        ([], ["model whisper"], "auto", "none", ""),
+        ([], ["quantization none"], "whisper-tiny.en", "none", str(COMMANDS)),
+    ],
+)
+def test_the_demo_runs_whisper_tiny_en_int8_with_the_commands_unless_told_otherwise(
+    tmp_path: Path, options: List[str], lines: List[str], engine: str, quantization: str, grammar: str
+) -> None:
+    if lines:
+        (tmp_path / "demo.ini").write_text("\n".join(lines) + "\n")
+        options = [*options, "-c", str(tmp_path / "demo.ini")]
+    arguments = build_parser().parse_args(["demo", *options])
+    recognizer, config = demo_engine(arguments, base_config(arguments.config))
+    assert (recognizer, config.quantization, config.grammar) == (engine, quantization, grammar)
