@@ -230,7 +230,7 @@ def test_a_phrase_about_as_likely_as_the_free_text_is_taken_on_the_audios_eviden
     " Fadl Macar." with -3.1."""
     scores = {"wave your hand": -5.4, "thank you": -7.6, "dance": -4.9, "stop": -20.0}
     heard = GrammarChoice(" Wait, go ahead.", -5.6, scores, {"wave your hand": 16.5, "dance": 7.9})
-    assert heard.preferred_candidates(-5.0) == ["wave your hand", "dance"]
+    assert heard.evidence_candidates(-5.0) == ["wave your hand", "dance"]
     assert heard.transcript(-5.0, 0.9) == Transcript("wave your hand", 0.9)
     # the most likely of several with the evidence
     assert GrammarChoice(" Wait.", -5.6, scores, {"wave your hand": 16.5, "dance": 8.0}).transcript(
@@ -248,12 +248,34 @@ def test_a_phrase_about_as_likely_as_the_free_text_is_taken_on_the_audios_eviden
     # the evidence counts only within PREFERRED_SLACK of the free text ("go to the kitchen later":
     # its command 4.6 nats less likely, +14.1)
     near_miss = GrammarChoice(" Wait, go ahead.", -4.8, scores, {"wave your hand": 16.5})
-    assert near_miss.preferred_candidates(-5.0) == ["dance"]
+    assert near_miss.evidence_candidates(-5.0) == ["dance"]
     assert near_miss.transcript(-5.0) == Transcript("", rejected="dance")
     # ... or within the threshold, when that is stricter (0.4 nats less likely)
     slightly_less = GrammarChoice(
         " Wait.", -5.6, {"wave your hand": -6.0, "stop": -20.0}, {"wave your hand": 16.5}
     )
     assert slightly_less.transcript(-5.0) == Transcript("wave your hand")
-    assert slightly_less.preferred_candidates(-0.3) == []
+    assert slightly_less.evidence_candidates(-0.3) == []
     assert slightly_less.transcript(-0.3) == Transcript("", rejected="wave your hand")
+
+
+def test_a_one_word_phrase_heard_as_another_word_is_taken_on_the_audios_evidence_for_it() -> None:
+    """Issue 43, trained tiny.en int8 on people saying digits with 0.2 s of room noise: jackson's
+    five written " Bye!", the digit 0.6 nats less likely and 7.4 above the next digit, +9.7 evidence."""
+    digits = {"five": -10.6, "nine": -18.0, "one": -19.5}
+    heard = GrammarChoice(" Bye!", -10.0, digits, {"five": 9.7})
+    assert heard.evidence_candidates(-5.0) == ["five"]
+    assert heard.transcript(-5.0) == Transcript("five")
+    # other words heard as one word had at most +6.6 for the most probable command
+    assert GrammarChoice(" Damn", -10.0, digits, {"five": 6.6}).transcript(-5.0) == Transcript(
+        "", rejected="five"
+    )
+    # beyond the threshold (5.5 nats less likely): not a candidate, whatever its evidence
+    assert GrammarChoice(" Bye.", -5.1, digits).evidence_candidates(-5.0) == []
+    # two phrases within UNAMBIGUOUS_GAP of each other: neither is the one word it may be
+    close = {"five": -10.6, "nine": -11.9}
+    assert GrammarChoice(" Bye!", -10.0, close).evidence_candidates(-5.0) == []
+    # more words heard than the phrase has: a near miss ("Don't stop." for stop), not a candidate
+    assert GrammarChoice(" Don't stop.", -10.0, {"stop": -11.2, "go": -20.0}).evidence_candidates(-5.0) == []
+    # a phrase of more words is not one word heard otherwise
+    assert GrammarChoice(" Bye!", -10.0, {"thank you": -10.6, "go": -20.0}).evidence_candidates(-5.0) == []

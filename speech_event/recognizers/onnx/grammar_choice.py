@@ -10,8 +10,16 @@ at most a quarter of its phones different ("place a music" for "play some music"
 Whisper adds one more way (``evidence``), when those take none: a phrase the model finds about as
 probable as its own greedy text (at most PREFERRED_SLACK nats less, or ``threshold`` when that is
 stricter), which the audio made far more probable than it is with nothing said (EVIDENCE_THRESHOLD
-nats, the phrase scored against silence), is taken whatever the free text's words. Anything else
+nats, the phrase scored against silence), is taken whatever the free text's words; so is a
+one-word phrase the free text, one word too, may be another word for ("Bye!" for five), when it is
+the most probable phrase by UNAMBIGUOUS_GAP, within ``threshold``, with that evidence. Anything else
 is rejected, the most likely phrase named.
+
+Why the one-word way (issue 43, recordings of people saying digits and single command words):
+people's short words are often written as another word ("Bye!" for five, " full" for four, " Dump."
+for stop), the said word 0.6 to 5.4 nats less probable than that; other words heard so had at most
++6.6 evidence for the nearest command, the said ones up to +9.7. A free text of more words than the
+phrase is a near miss ("Don't stop." for stop: +8.2), never taken so.
 
 Why no more (issue 32, measured with trained Whisper tiny.en and base through bench/grammar.py):
 the ratio alone let a third of everyday speech through as a command. A short phrase the model
@@ -54,8 +62,14 @@ NEURAL_GRAMMAR_THRESHOLD = -5.0
 # evidence: " Don't stop." (base int8, espeak) and "stop" at -1.15 nats, +8.2.
 PREFERRED_SLACK = -0.5
 # The least evidence (nats) for such a phrase: the commands it took through the node +8.3 and more,
-# other speech within the slack at most +6.0.
+# other speech within the slack at most +6.0. People's single words (issue 43, tiny.en int8, 0.2 s
+# of room noise around each): other words heard as one word had at most +6.6 for the most probable
+# one-word command ("dance" for " Damn", -5.7 nats); digits and commands heard as another word
+# ("Bye!" for five, " Dump." for stop) +3.7 to +9.7.
 EVIDENCE_THRESHOLD = 8.0
+# How far a one-word phrase heard as another word must be above every other phrase for its evidence
+# to count: the people's digits heard as another word had 3.0 nats and more over the next digit.
+UNAMBIGUOUS_GAP = 2.0
 
 _NOT_SPELT = re.compile(r"[^a-z' ]+")
 _NUMBER = re.compile(r"\d+")
@@ -118,7 +132,7 @@ class GrammarChoice:
     free_text: str
     free_score: float  # log-probability of the free decoding
     phrase_scores: Dict[str, float]  # log-probability of each phrase (its best form)
-    # For the phrases ``preferred_candidates`` names, when the engine can score a phrase with nothing
+    # For the phrases ``evidence_candidates`` names, when the engine can score a phrase with nothing
     # said (Whisper): log P(phrase | audio) - log P(phrase | silence), its best form's.
     evidence: Mapping[str, float] = field(default_factory=dict)
 
@@ -126,11 +140,25 @@ class GrammarChoice:
         """log P(phrase) - log P(free text), in nats."""
         return self.phrase_scores[phrase] - self.free_score
 
-    def preferred_candidates(self, threshold: float) -> List[str]:
-        """The phrases whose evidence may decide: about as probable as the free text (PREFERRED_SLACK,
-        or ``threshold`` when that is stricter). Few or none: the engine scores only these unheard."""
+    def evidence_candidates(self, threshold: float) -> List[str]:
+        """The phrases whose evidence may decide (few or none: the engine scores only these unheard):
+        those about as probable as the free text (PREFERRED_SLACK, or ``threshold`` when that is
+        stricter); and, when the free text is one word, the most probable phrase if it is one word
+        too, at least ``threshold``, and UNAMBIGUOUS_GAP above every other phrase."""
         least = max(threshold, PREFERRED_SLACK)
-        return [phrase for phrase in self.phrase_scores if self.ratio(phrase) >= least]
+        candidates = [phrase for phrase in self.phrase_scores if self.ratio(phrase) >= least]
+        word = self._one_word_heard_as(threshold)
+        return candidates if word is None or word in candidates else [*candidates, word]
+
+    def _one_word_heard_as(self, threshold: float) -> Optional[str]:
+        """The one-word phrase a one-word free text may be another word for, or None."""
+        ranked = sorted(self.phrase_scores, key=self.phrase_scores.__getitem__, reverse=True)
+        if len(spelt(self.free_text).split()) != 1 or len(ranked[0].split()) != 1:
+            return None
+        runner_up = self.phrase_scores[ranked[1]] if len(ranked) > 1 else -math.inf
+        if self.ratio(ranked[0]) < threshold or self.phrase_scores[ranked[0]] - runner_up < UNAMBIGUOUS_GAP:
+            return None
+        return ranked[0]
 
     def transcript(self, threshold: float, confidence: Optional[float] = None) -> Transcript:
         """The phrase said, or no text naming the most likely phrase as rejected."""
@@ -146,7 +174,7 @@ class GrammarChoice:
             return Transcript(max(misheard, key=self.phrase_scores.__getitem__), confidence)
         preferred = [
             phrase
-            for phrase in self.preferred_candidates(threshold)
+            for phrase in self.evidence_candidates(threshold)
             if self.evidence.get(phrase, -math.inf) >= EVIDENCE_THRESHOLD
         ]
         if preferred:

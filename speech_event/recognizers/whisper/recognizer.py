@@ -179,7 +179,7 @@ class WhisperRecognizer:
         confidence = None if free.no_speech_prob is None else 1.0 - free.no_speech_prob
         answer = choice.transcript(self._threshold, confidence)
         if not answer.text:  # the words took no phrase: the evidence may
-            candidates = choice.preferred_candidates(self._threshold)
+            candidates = choice.evidence_candidates(self._threshold)
             unheard = self._unheard([best[phrase][1] for phrase in candidates])
             if run.terminate:  # stopped during the calls on silence, which are not stoppable
                 raise RuntimeError(f"{ENGINE}: transcription stopped (RunOptions.terminate)")
