@@ -13,8 +13,12 @@ from tests.helpers.every_scenario import (
 from tests.helpers.scenario_files import TRAINED_SCENARIOS
 
 
-def test_there_are_scenarios_on_trained_weights_for_free_speech_and_set_grammar() -> None:
-    assert [path.stem for path in TRAINED_SCENARIOS] == ["trained_free_speech", "trained_yes_no"]
+def test_there_are_scenarios_on_trained_weights_for_free_speech_set_grammar_and_people() -> None:
+    assert [path.stem for path in TRAINED_SCENARIOS] == [
+        "trained_free_speech",
+        "trained_people_words",
+        "trained_yes_no",
+    ]
 
 
 @pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)
