@@ -279,3 +279,19 @@ def test_a_one_word_phrase_heard_as_another_word_is_taken_on_the_audios_evidence
     assert GrammarChoice(" Don't stop.", -10.0, {"stop": -11.2, "go": -20.0}).evidence_candidates(-5.0) == []
     # a phrase of more words is not one word heard otherwise
     assert GrammarChoice(" Bye!", -10.0, {"thank you": -10.6, "go": -20.0}).evidence_candidates(-5.0) == []
+
+
+def test_a_free_text_that_is_a_phrase_needs_the_audios_evidence_where_the_engine_gives_it() -> None:
+    """Issue 43, trained tiny.en int8: " Thank you." written for babble 10 dB under a spoken "bird"
+    (+0.1 evidence); "thank you" said in espeak's and festival's voices +3.6 to +4.0."""
+    scores = {"thank you": -4.3, "stop": -20.0}
+    assert GrammarChoice(" Thank you.", -4.3, scores, {"thank you": 0.1}).transcript(-5.0) == Transcript(
+        "", rejected="thank you"
+    )
+    assert GrammarChoice(" Thank you.", -0.4, scores, {"thank you": 3.6}).transcript(-5.0) == Transcript(
+        "thank you"
+    )
+    # no evidence given (the NeMo engines cannot score a text unheard): the free text decides
+    assert GrammarChoice(" Thank you.", -4.3, scores).transcript(-5.0) == Transcript("thank you")
+    assert GrammarChoice(" Thank you.", -4.3, scores).free_phrase == "thank you"
+    assert GrammarChoice(" Thanks.", -4.3, scores).free_phrase is None

@@ -15,6 +15,10 @@ one-word phrase the free text, one word too, may be another word for ("Bye!" for
 the most probable phrase by UNAMBIGUOUS_GAP, within ``threshold``, with that evidence. Anything else
 is rejected, the most likely phrase named.
 
+A free text that is a phrase is taken only if the audio's evidence for it is at least
+HEARD_EVIDENCE, where the engine can score it unheard: Whisper writes the text it expects with
+nothing said (" Thank you.") for sound it cannot make out, babble under a word.
+
 Why the one-word way (issue 43, recordings of people saying digits and single command words):
 people's short words are often written as another word ("Bye!" for five, " full" for four, " Dump."
 for stop), the said word 0.6 to 5.4 nats less probable than that; other words heard so had at most
@@ -67,6 +71,11 @@ PREFERRED_SLACK = -0.5
 # one-word command ("dance" for " Damn", -5.7 nats); digits and commands heard as another word
 # ("Bye!" for five, " Dump." for stop) +3.7 to +9.7.
 EVIDENCE_THRESHOLD = 8.0
+# The least evidence for a phrase that is the free text itself, where the engine can score it
+# unheard (Whisper): tiny.en int8 wrote " Thank you." for babble 10 dB under a spoken "bird", +0.1;
+# "thank you" said in espeak's and festival's voices had +3.6 to +4.0, every other command said
+# +6.6 and more (people's yes, no and stop; the synthetic voices).
+HEARD_EVIDENCE = 2.0
 # How far a one-word phrase heard as another word must be above every other phrase for its evidence
 # to count: the people's digits heard as another word had 3.0 nats and more over the next digit.
 UNAMBIGUOUS_GAP = 2.0
@@ -160,10 +169,18 @@ class GrammarChoice:
             return None
         return ranked[0]
 
+    @property
+    def free_phrase(self) -> Optional[str]:
+        """The phrase the free text is, spelt as the grammar spells it, or None."""
+        said = spelt(self.free_text)
+        return said if said in self.phrase_scores else None
+
     def transcript(self, threshold: float, confidence: Optional[float] = None) -> Transcript:
         """The phrase said, or no text naming the most likely phrase as rejected."""
         said = spelt(self.free_text)
         if said in self.phrase_scores:
+            if self.evidence.get(said, math.inf) < HEARD_EVIDENCE:
+                return Transcript("", rejected=said)  # what the model writes for unclear sound
             return Transcript(said, confidence)
         misheard = [
             phrase

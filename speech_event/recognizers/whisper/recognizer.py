@@ -9,8 +9,9 @@ has none for Kinyarwanda) is refused when the engine is built.
 With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing
 (forced.py) in the forms Whisper writes it (written_forms.py: its usual ones, and for a phrase the
 free text may be a mishearing of, the phrase in the free text's punctuation), each form in the
-tokens Whisper's tokenizer gives it (tokenizer.py); the phrases about as probable as the free text
-scored against silence too (forced.UnheardScores: the audio's evidence for them); the answer
+tokens Whisper's tokenizer gives it (tokenizer.py); the free text when it is a phrase, else the
+phrases evidence_candidates names, scored against silence too (forced.UnheardScores: the audio's
+evidence for them); the answer
 chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
 piece is decoded then.
 """
@@ -177,17 +178,29 @@ class WhisperRecognizer:
                 best[phrase] = score, tokens
         choice = GrammarChoice(free_text, free.score, {phrase: score for phrase, (score, _) in best.items()})
         confidence = None if free.no_speech_prob is None else 1.0 - free.no_speech_prob
+        if choice.free_phrase is not None:  # taken only on the audio's evidence for it
+            choice = self._with_evidence(choice, best, [choice.free_phrase], run)
         answer = choice.transcript(self._threshold, confidence)
-        if not answer.text:  # the words took no phrase: the evidence may
-            candidates = choice.evidence_candidates(self._threshold)
-            unheard = self._unheard([best[phrase][1] for phrase in candidates])
-            if run.terminate:  # stopped during the calls on silence, which are not stoppable
-                raise RuntimeError(f"{ENGINE}: transcription stopped (RunOptions.terminate)")
-            evidence = {phrase: best[phrase][0] - prior for phrase, prior in zip(candidates, unheard)}
-            choice = dataclasses.replace(choice, evidence=evidence)
+        if not answer.text and choice.free_phrase is None:  # the words took no phrase: the evidence may
+            choice = self._with_evidence(choice, best, choice.evidence_candidates(self._threshold), run)
             answer = choice.transcript(self._threshold, confidence)
         self._last_choice = choice
         return answer
+
+    def _with_evidence(
+        self,
+        choice: GrammarChoice,
+        best: Dict[str, Tuple[float, List[int]]],
+        phrases: List[str],
+        run: onnxruntime.RunOptions,
+    ) -> GrammarChoice:
+        """``choice`` with the audio's evidence for ``phrases``: each one's best form scored with
+        the audio, less the same tokens scored against silence."""
+        unheard = self._unheard([best[phrase][1] for phrase in phrases])
+        if run.terminate:  # stopped during the calls on silence, which are not stoppable
+            raise RuntimeError(f"{ENGINE}: transcription stopped (RunOptions.terminate)")
+        evidence = {phrase: best[phrase][0] - prior for phrase, prior in zip(phrases, unheard)}
+        return dataclasses.replace(choice, evidence={**choice.evidence, **evidence})
 
     def _as_written(self, forms: PhraseForms, free_text: str) -> List[Tuple[str, List[int]]]:
         """Each phrase the free text is that phrase misheard (the only phrases the decision may
