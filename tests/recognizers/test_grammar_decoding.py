@@ -266,10 +266,17 @@ def test_a_one_word_phrase_heard_as_another_word_is_taken_on_the_audios_evidence
     heard = GrammarChoice(" Bye!", -10.0, digits, {"five": 9.7})
     assert heard.evidence_candidates(-5.0) == ["five"]
     assert heard.transcript(-5.0) == Transcript("five")
-    # other words heard as one word had at most +6.6 for the most probable command
-    assert GrammarChoice(" Damn", -10.0, digits, {"five": 6.6}).transcript(-5.0) == Transcript(
+    # ONE_WORD_EVIDENCE (7.0): base int8's " Fix." for six, +7.5; other words heard as one word
+    # had at most +5.6 for the most probable command
+    assert GrammarChoice(" Fix.", -10.0, {"six": -11.7, "five": -18.0}, {"six": 7.5}).transcript(
+        -5.0
+    ) == Transcript("six")
+    assert GrammarChoice(" Damn", -10.0, digits, {"five": 6.9}).transcript(-5.0) == Transcript(
         "", rejected="five"
     )
+    # the same evidence for a phrase within the slack of a free text of more words: EVIDENCE_THRESHOLD
+    near = GrammarChoice(" Don't stop.", -10.0, {"stop": -10.3, "go": -20.0}, {"stop": 7.5})
+    assert near.transcript(-5.0) == Transcript("", rejected="stop")
     # beyond the threshold (5.5 nats less likely): not a candidate, whatever its evidence
     assert GrammarChoice(" Bye.", -5.1, digits).evidence_candidates(-5.0) == []
     # two phrases within UNAMBIGUOUS_GAP of each other: neither is the one word it may be
