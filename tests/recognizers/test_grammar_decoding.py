@@ -14,7 +14,13 @@ from speech_event.errors import GrammarError
 from speech_event.grammar import Grammar, jsgf_grammar, requested_grammar
 from speech_event.ports import Grammars, Transcript
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
-from speech_event.recognizers.onnx.grammar_choice import GrammarChoice, number_words, one_word_changed, spelt
+from speech_event.recognizers.onnx.grammar_choice import (
+    GrammarChoice,
+    heard_as,
+    number_words,
+    one_word_changed,
+    spelt,
+)
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 
@@ -302,3 +308,16 @@ def test_a_free_text_that_is_a_phrase_needs_the_audios_evidence_where_the_engine
     assert GrammarChoice(" Thank you.", -4.3, scores).transcript(-5.0) == Transcript("thank you")
     assert GrammarChoice(" Thank you.", -4.3, scores).free_phrase == "thank you"
     assert GrammarChoice(" Thanks.", -4.3, scores).free_phrase is None
+
+
+def test_a_one_word_phrase_written_as_a_word_pronounced_the_same_is_taken_within_the_threshold() -> None:
+    """Issue 43, base int8 on george's four: written " for", 2.9 nats more likely than "four"."""
+    digits = {"four": -12.9, "five": -13.7, "two": -20.0}
+    assert GrammarChoice(" for", -10.0, digits).transcript(-5.0) == Transcript("four")
+    assert GrammarChoice(" too.", -10.0, {"two": -11.0, "ten": -19.0}).transcript(-5.0) == Transcript("two")
+    # beyond the threshold: rejected
+    assert GrammarChoice(" for", -7.0, digits).transcript(-5.0) == Transcript("", rejected="four")
+    # a word that sounds otherwise, by one phone ("Dan's" for dance), or more words: not the phrase
+    assert not heard_as("dan's", "dance")
+    assert not heard_as("for you", "four")
+    assert heard_as("ate", "eight")

@@ -2,11 +2,12 @@
 
 Each phrase of the grammar has its exact log-probability under the model (the engine scores it: a
 forward algorithm, teacher forcing); the model's own free decoding of the same audio has its
-log-probability too. A phrase is the answer when the free text is that phrase; or when the phrase
-has two words or more, the free text is that phrase misheard, and the phrase is at most
-``threshold`` nats less likely than the free text (a log-likelihood ratio). Misheard: one word heard
-otherwise ("bring me the red cop" for "bring me the red cup"), or words that sound like the phrase,
-at most a quarter of its phones different ("place a music" for "play some music", sounds_alike.py).
+log-probability too. A phrase is the answer when the free text is that phrase; or when the free
+text is that phrase misheard, and the phrase is at most ``threshold`` nats less likely than the free
+text (a log-likelihood ratio). Misheard: one word heard otherwise ("bring me the red cop" for "bring
+me the red cup"), or words that sound like the phrase, at most a quarter of its phones different
+("place a music" for "play some music", sounds_alike.py); a one-word phrase, only a word pronounced
+exactly as it ("for" for four: people's digits, issue 43).
 Whisper adds one more way (``evidence``), when those take none: a phrase the model finds about as
 probable as its own greedy text (at most PREFERRED_SLACK nats less, or ``threshold`` when that is
 stricter), which the audio made far more probable than it is with nothing said (EVIDENCE_THRESHOLD
@@ -33,8 +34,8 @@ macar": +6.2 nats): out-of-grammar speech reached -0.3 nats and above, commands 
 wrong -0.1 to -3.8. What separates them is the words and their sounds: a command misheard is the
 command with one word changed, or words that sound like it; a near miss is a command with a word
 added or left out ("go to the kitchen later": 4 phones more than its 11) or other speech. A
-one-word phrase heard otherwise is another word ("stops", "dan's" for "dance"): never taken by the
-words.
+one-word phrase heard as a word that sounds otherwise is another word ("stops", "dan's" for
+"dance"): never taken by the words.
 
 Why the evidence (issue 32, the same measurements): greedy decoding is not the model's most
 probable text. In festival's kal voice tiny.en wrote "wave your hand" as " Wait, go ahead.", yet
@@ -209,9 +210,12 @@ class GrammarChoice:
 
 
 def heard_as(heard: str, phrase: str) -> bool:
-    """Whether ``heard`` is ``phrase`` (two words or more) misheard: one word changed, or sounding
-    alike. A one-word phrase heard otherwise is another word."""
-    return len(phrase.split()) >= 2 and (one_word_changed(heard, phrase) or sounds_alike(heard, phrase))
+    """Whether ``heard`` is ``phrase`` misheard: for two words or more, one word changed or sounding
+    alike; for one word, one word pronounced exactly as it (a homophone: "for" for four, "too" for
+    two). A one-word phrase heard as a word that sounds otherwise is another word."""
+    if len(phrase.split()) == 1:
+        return len(heard.split()) == 1 and sounds_alike(heard, phrase, share=0.0)
+    return one_word_changed(heard, phrase) or sounds_alike(heard, phrase)
 
 
 def one_word_changed(heard: str, phrase: str) -> bool:
