@@ -355,7 +355,14 @@ class RosReplay:
         node = self._node_name()
         if not any(topic == DIAGNOSTICS_TOPIC and node in names for topic, names in publishers):
             return None
-        wait_until(lambda: self._diagnostics.get_num_connections() > 0, "the node's /diagnostics")
+        # Connected to this node: our subscriber's own count may still hold the last scenario's
+        # node, and a check published before the connection is lost (a replay then waited 20 s for
+        # the check at 5.0 s). The replay is the only subscriber of the node's /diagnostics.
+        uri = self._find_node()
+        wait_until(
+            lambda: bool(self._live_connections(uri, DIAGNOSTICS_TOPIC, published=True)),
+            "the node's /diagnostics",
+        )
         return HealthChecks(float(rospy.get_param(START_TIME_PARAM, 0.0)), period)
 
     def _node_ready(self) -> bool:
@@ -372,9 +379,12 @@ class RosReplay:
             raise ReplayError("no node under test is up")
         return self._live_connections(self._node_uri)
 
-    def _live_connections(self, node_uri: str, topic: str = SIGNAL_TOPIC) -> List[Any]:
-        """The node's live connections on ``topic``, as getBusStats gives them:
-        [connection id, bytes received, messages received, drop estimate, connected]."""
+    def _live_connections(
+        self, node_uri: str, topic: str = SIGNAL_TOPIC, published: bool = False
+    ) -> List[Any]:
+        """The node's live connections on ``topic``, as getBusStats gives them: subscribed,
+        [connection id, bytes received, messages received, drop estimate, connected]; published,
+        [connection id, bytes sent, messages sent, connected]."""
         proxy = xmlrpc.client.ServerProxy(node_uri)
         try:
             stats: Any = proxy.getBusStats("/speechEventReplay")
@@ -382,6 +392,8 @@ class RosReplay:
             raise ReplayError(
                 f"the node under test at {node_uri} did not answer getBusStats: {problem}"
             ) from None
+        if published:
+            return [c for name, _, connections in stats[2][0] if name == topic for c in connections if c[3]]
         subscriptions = stats[2][1]
         return [c for name, connections in subscriptions if name == topic for c in connections if c[4]]
 
