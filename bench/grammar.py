@@ -37,8 +37,9 @@ against the free decoding) as min / median / max for commands and for other spee
 nearest cases; and the decoding time per second of audio. Printed; nothing is asserted.
 
 ``--record FILE`` writes each decision (for the neural engines the free decoding, every phrase's
-score and, for Whisper, the evidence of the phrases evidence_candidates names, when the words
-took none: a replay with a wider slack than the record's lacks the rest); ``--replay FILE``
+score and, for Whisper, the evidence of the free text's phrase, or of the phrases
+evidence_candidates names when the words took none: a replay with a wider slack than the record's
+lacks the rest); ``--replay FILE``
 judges those again with today's rule, decoding nothing: how a change of the rule
 (onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
 """

@@ -67,10 +67,7 @@ NEURAL_GRAMMAR_THRESHOLD = -5.0
 # evidence: " Don't stop." (base int8, espeak) and "stop" at -1.15 nats, +8.2.
 PREFERRED_SLACK = -0.5
 # The least evidence (nats) for such a phrase: the commands it took through the node +8.3 and more,
-# other speech within the slack at most +6.0. People's single words (issue 43, tiny.en int8, 0.2 s
-# of room noise around each): other words heard as one word had at most +6.6 for the most probable
-# one-word command ("dance" for " Damn", -5.7 nats); digits and commands heard as another word
-# ("Bye!" for five, " Dump." for stop) +3.7 to +9.7.
+# other speech within the slack at most +6.0.
 EVIDENCE_THRESHOLD = 8.0
 # The least evidence for a phrase that is the free text itself, where the engine can score it
 # unheard (Whisper), between what sound the model could not make out gave and what the phrase said

@@ -11,9 +11,8 @@ With a grammar in force: the free greedy decoding, then each phrase scored by te
 free text may be a mishearing of, the phrase in the free text's punctuation), each form in the
 tokens Whisper's tokenizer gives it (tokenizer.py); the free text when it is a phrase, else the
 phrases evidence_candidates names, scored against silence too (forced.UnheardScores: the audio's
-evidence for them); the answer
-chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
-piece is decoded then.
+evidence for them); the answer chosen as onnx/grammar_choice.py says. A command fits in Whisper's
+30 s window: only the first piece is decoded then.
 """
 
 import dataclasses
