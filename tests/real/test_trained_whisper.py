@@ -135,7 +135,7 @@ def test_peoples_digits_written_as_other_words_are_published_as_the_digit_and_ot
     """Issue 43, FSDD's george and lucas (8 kHz) with 0.2 s of room noise: tiny.en writes four as
     " forward" and " full", eight as " A", 1.5 to 2.7 nats more probable than the digit; the digit is
     the most probable phrase by 3.3 nats or more, and the audio raised it 9.1 nats or more above its
-    score against silence (EVIDENCE_THRESHOLD 8): published. Speech Commands' "down" written
+    score against silence (ONE_WORD_EVIDENCE 7): published. Speech Commands' "down" written
     " Damn." (dance 6.0 nats below it) and " We're going." (no: +4.8): rejected."""
     engine = WhisperRecognizer(tiny_en, "english", grammar=phrases_grammar(list(DIGITS), "digits"))
     said = [("4_george_0", "four"), ("4_lucas_0", "four"), ("8_george_0", "eight")]
