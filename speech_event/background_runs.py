@@ -4,9 +4,9 @@ Two kinds, at most one of each at a time: a speculation (speculation.py: its tex
 closed utterance's), and a partial result (partials.py): a Stoppable engine's partial run, or an
 Incremental engine's partial feed. Closed utterances always come first. The rules:
 
-- a speculation may start once the speaker has paused for ``speculation_gap``, on an engine that
-  can be stopped, with the worker idle and no speculation there; it cancels a partial in progress
-  (it may be the final text);
+- a speculation may start once the speaker has paused for ``speculation_gap`` (or a decision on the
+  end of speech waits for it), on an engine that can be stopped, with the worker idle and no
+  speculation there; it cancels a partial in progress (it may be the final text);
 - a partial may start when one is due (``partial_period``), with the worker idle and no speculation
   there, on audio that grew since the last;
 - a block cancels the speculation (what it transcribes is no longer the utterance), not the
@@ -18,8 +18,9 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 - when a run ends, or the worker finishes a closed utterance, the next run may start.
 
 A speculation that ends with the utterance still being collected may end the turn early
-(``early_pause``), and its text is a partial too when it is new. Every method is called under the
-node's lock; the jobs run on the worker and take the lock.
+(``early_pause``; or ``end_of_speech``: the node asked for a decision on a cut, and the speculation
+starts at once, on the samples up to it), and its text is a partial too when it is new. Every
+method is called under the node's lock; the jobs run on the worker and take the lock.
 """
 
 import functools
@@ -50,6 +51,9 @@ class UtteranceSoFar:
     recognizer: Recognizer  # the engine and grammar in force
     grammar: Optional[Grammar]
     origin: TextOrigin  # of a text of it so far
+    # The cut a decision on the end of speech waits for (end_of_turn.py): the speculation then is
+    # on the samples up to it, whatever the gap. None: no decision pending.
+    deciding: Optional[int] = None
 
 
 class Turn(Protocol):
@@ -59,8 +63,9 @@ class Turn(Protocol):
         """Whether the speaker has paused for speculation_gap since the latest block."""
         ...
 
-    def end_early(self) -> None:
-        """A speculation found a complete answer: the turn ends after early_pause."""
+    def speculated(self, samples: int, complete: bool) -> None:
+        """A speculation on the first ``samples`` of the utterance being collected ended (its
+        text complete or not): the turn may end early."""
         ...
 
 
@@ -159,12 +164,12 @@ class BackgroundRuns:
     def speculate(self) -> None:
         """Speculate on the utterance being collected if its gap has passed and the rules allow it."""
         so_far = self.so_far()
-        if so_far is None or not self.turn.gap_passed():
+        if so_far is None or (so_far.deciding is None and not self.turn.gap_passed()):
             return
         if not self._speculation.may_start(so_far.recognizer, self.worker_idle()):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
-        audio = so_far.audio()
+        audio = so_far.audio()[: so_far.deciding]
         speculation = self._speculation.start(audio.size, so_far.recognizer, so_far.grammar)
         job = functools.partial(self._speculated, speculation, audio, so_far.origin)
         speculation.handle = self.worker.executor.submit(job)
@@ -205,13 +210,16 @@ class BackgroundRuns:
         partial: Optional[Transcript] = None
         with self.lock:
             job = self._speculation.finished(speculation, outcome)
-            if job is None:
-                if self._speculation.ends_turn(speculation):
-                    self.turn.end_early()
-                if not speculation.cancelled:  # the utterance so far: its text is a partial too
+            if job is None and not speculation.cancelled:
+                self.turn.speculated(speculation.samples, self._speculation.ends_turn(speculation))
+                if speculation.adopted is None:  # the utterance so far: its text is a partial too
                     partial = self._partials.spoken(speculation.samples, outcome.answer)
         if job is not None:
             self.worker.publication.conclude(job, outcome)
+            with self.lock:  # the worker is free: a decision on the end of speech may wait for it
+                so_far = self.so_far()
+                if so_far is not None and so_far.deciding is not None:
+                    self.speculate()
         elif partial is not None:
             self.worker.publication.partial(partial, origin)
 

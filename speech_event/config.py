@@ -90,6 +90,10 @@ class SpeechEventConfig:
     # text two speculations in a row agreed on.
     early_pause: float = 0.0
     complete_answers: str = "yes,no,yego,oya"
+    # End of turn at the end of speech (speech_event/end_of_turn.py): once this long of non-speech
+    # follows the speech in the audio (or no block came for this long), the turn ends there if
+    # the text up to there is complete; 0: off.
+    end_of_speech: float = 0.0
     # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
     # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
     partial_period: float = 0.5
@@ -127,6 +131,15 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"early_pause {config.early_pause} s needs speculative_recognition true and must be from "
             f"speculation_gap ({config.speculation_gap} s) to less than speech_pause_period "
             f"({config.speech_pause_period} s)"
+        )
+    if config.end_of_speech and not (
+        config.speculative_recognition
+        and not config.early_pause
+        and config.end_of_speech < config.speech_pause_period
+    ):
+        return (
+            f"end_of_speech {config.end_of_speech} s needs speculative_recognition true and early_pause 0, "
+            f"and must be less than speech_pause_period ({config.speech_pause_period} s)"
         )
     if 0 < config.partial_period < SHORTEST_PARTIAL_PERIOD:
         return (
@@ -179,6 +192,7 @@ _FORMAT = KeyValueFormat(
         "early_pause": seconds(0.0, 60.0),
         "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
         "partial_period": seconds(0.0, 60.0),
+        "end_of_speech": seconds(0.0, 60.0),
     },
     # The robot's v1.1 spellings.
     aliases={

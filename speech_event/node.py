@@ -20,10 +20,16 @@ from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.config import SpeechEventConfig
+from speech_event.end_of_turn import EndOfTurn
 from speech_event.grammar import FREE_SPEECH, Grammar
 from speech_event.health import Health
 from speech_event.interfaces.action import ACTION_NAME, DISABLED, ListenAction
-from speech_event.interfaces.diagnostics import DISCARDED_WHILE_DISABLED, NodeState, NodeStatistics
+from speech_event.interfaces.diagnostics import (
+    DISCARDED_AFTER_SPEECH,
+    DISCARDED_WHILE_DISABLED,
+    NodeState,
+    NodeStatistics,
+)
 from speech_event.interfaces.language_engines import EngineBuilder, LanguageEngines
 from speech_event.interfaces.services import (
     SET_ENABLED_SERVICE,
@@ -44,7 +50,16 @@ from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
 from speech_event.pipeline.validate import Rejection, validate_signal
 from speech_event.pipeline.worker import Worker
-from speech_event.ports import Audio, Clock, Executor, PublisherStatus, Recognizer, Transport, engine_name
+from speech_event.ports import (
+    Audio,
+    Clock,
+    Executor,
+    PublisherStatus,
+    Recognizer,
+    Stoppable,
+    Transport,
+    engine_name,
+)
 from speech_event.speculation import SpeculationCounts
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
 from speech_event.turn_taking import TurnTaking
@@ -100,8 +115,9 @@ class SpeechEventNode:
         self._grammar = starting_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
+        self._end = EndOfTurn(config)
         self._turn = TurnTaking(
-            config, clock, self._lock, self._close_utterance, lambda: self._background.speculate()
+            config, clock, self._lock, self._close_utterance, self._gap_passed, self._speculated
         )
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         recognition = Recognition(config.sample_rate, screen, stopwatch)
@@ -186,6 +202,7 @@ class SpeechEventNode:
         with self._lock:
             self._turn.stop()
             self._background.stop()
+            self._end.dropped()
 
     def flush_storage(self) -> None:
         """Wait until every utterance transcribed so far is stored (when storing is on)."""
@@ -212,29 +229,88 @@ class SpeechEventNode:
                 return
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
-            arrival = self._clock.now()
-            self._turn.end_pause_if_over()  # first: a speculation on the utterance it ends still counts
-            self._background.more_audio()
-            if self._assembler.pending_samples == 0:
-                self._collecting_since = arrival
-                self._action.utterance_started(arrival)
-                self._background.utterance_started(arrival)
-            completed = self._assembler.add(signal.samples)
-            for index, utterance in enumerate(completed):
-                # Cut at the length limit: the speech goes on in the next utterance.
-                more_follows = index < len(completed) - 1 or self._assembler.pending_samples > 0
-                self._submit(utterance, more_follows, arrival)
-            if completed:
-                self._background.utterance_cut(arrival)
-            self._turn.heard(arrival)
-            self._background.heard()
+            self._arrived(signal.samples, self._clock.now())
+
+    def _arrived(self, samples: Audio, arrival: float) -> None:
+        """Under the lock: a block that arrived at ``arrival``, taken now or held for a decision."""
+        # First: a speculation on the utterance it ends still counts, and a decision on the end of
+        # speech that the gap before it asks for is made before it is taken.
+        self._turn.end_pause_if_over(arrival)
+        if self._end.deciding is not None:
+            self._end.hold(samples, arrival)
+            return
+        self._background.more_audio()
+        if self._assembler.pending_samples == 0:
+            self._collecting_since = arrival
+            self._action.utterance_started(arrival)
+            self._background.utterance_started(arrival)
+        completed = self._assembler.add(samples)
+        for index, utterance in enumerate(completed):
+            # Cut at the length limit: the speech goes on in the next utterance.
+            more_follows = index < len(completed) - 1 or self._assembler.pending_samples > 0
+            self._submit(utterance, more_follows, arrival)
+        if completed:
+            self._background.utterance_cut(arrival)
+            self._end.cut_at_length(self._assembler.peek())
+        else:
+            self._end.heard(samples)
+        self._turn.heard(arrival)
+        self._background.heard()
+        self._decide(self._end.heard_end())
+
+    def _gap_passed(self) -> None:
+        """Under the lock: no block came for the gap; with end_of_speech that is the end of speech."""
+        self._decide(self._end.gap_end())
+        self._background.speculate()
+
+    def _decide(self, cut: Optional[int]) -> None:
+        """Under the lock: a speculation on the utterance up to ``cut`` decides whether the turn
+        ends there (with an engine that can be stopped: one that cannot does not speculate)."""
+        if cut is not None and self._enabled and isinstance(self._recognizer, Stoppable):
+            self._end.decide(cut)
+            self._background.speculate()
+
+    def _speculated(self, samples: int, complete: bool) -> None:
+        """Under the lock: a speculation on the utterance being collected ended; if it is the
+        pending decision, the turn ends at its cut when its text is complete."""
+        if self._end.deciding == samples:
+            self._decided(complete)
+
+    def _decided(self, complete: bool) -> None:
+        """Under the lock: the pending decision is made; then the blocks held meanwhile are taken."""
+        cut, close_waits = self._end.deciding, self._end.close_waits
+        held = self._end.decided()
+        if complete and cut is not None:
+            audio = self._assembler.close()
+            self._background.utterance_closed()
+            self._turn.drop_turn()
+            if audio is not None:  # what follows the cut is the room after the speech: dropped
+                self._submit(audio[:cut], False, self._turn.last_arrival)
+            self._end.closed(at_cut=True)
+        for block in held:
+            self._arrived(block.samples, block.arrival)
+        if close_waits and not complete:
+            self._turn.pause_again()
+
+    def _undecided(self) -> None:
+        """Under the lock: the speculation a decision waited for was dropped; the turn goes on."""
+        if self._end.deciding is not None:
+            self._decided(False)
 
     def _close_utterance(self) -> None:
         """Under the lock: the pause after the utterance being collected has passed."""
+        if self._end.deciding is not None:  # the decision may end it elsewhere: it comes first
+            self._end.close_waits = True
+            return
         self._background.utterance_closed()
         utterance = self._assembler.close()
-        if utterance is not None:
+        if utterance is not None and not self._end.worth_transcribing():
+            self._statistics.discarded(DISCARDED_AFTER_SPEECH)
+            self._action.utterance_dropped()
+            self._collecting_since = None
+        elif utterance is not None:
             self._submit(utterance, False, self._turn.last_arrival)
+        self._end.closed(at_cut=False)
 
     def _so_far(self) -> Optional[UtteranceSoFar]:
         """Under the lock: the utterance being collected, None when there is none (or disabled)."""
@@ -243,7 +319,9 @@ class SpeechEventNode:
             return None
         first = self._collecting_since if self._collecting_since is not None else last
         origin = TextOrigin(self._language, engine_name(self._recognizer), first, last)
-        return UtteranceSoFar(pending, self._assembler.peek, self._recognizer, self._grammar, origin)
+        return UtteranceSoFar(
+            pending, self._assembler.peek, self._recognizer, self._grammar, origin, self._end.deciding
+        )
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:
         """Hand a closed utterance to recognition with the engine in use now (under the lock)."""
@@ -280,12 +358,13 @@ class SpeechEventNode:
         is the robot's own voice); enabled again, the node starts clean. Health checks go on, and
         recognitions already handed over still publish."""
         with self._lock:
-            self._turn.end_pause_if_over()  # an utterance already over is no robot's voice
+            self._turn.end_pause_if_over(self._clock.now())  # an utterance already over is no robot's voice
             changed = enabled != self._enabled
             self._enabled = enabled
             if not enabled:
                 self._background.drop_utterance()
                 self._turn.drop_turn()
+                self._end.dropped()
                 if self._assembler.close() is not None:
                     self._statistics.discarded(DISCARDED_WHILE_DISABLED)
                     self._action.utterance_dropped()
@@ -297,15 +376,17 @@ class SpeechEventNode:
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         with self._lock:  # utterances closed before this finish with the old engine
-            self._turn.end_pause_if_over()
+            self._turn.end_pause_if_over(self._clock.now())
             self._background.drop()
+            self._undecided()
             self._language, self._recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
         with self._lock:  # utterances closed before this finish with the old grammar
-            self._turn.end_pause_if_over()
+            self._turn.end_pause_if_over(self._clock.now())
             self._background.drop()
+            self._undecided()
             self._grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)
 

@@ -166,10 +166,25 @@ def complete_answers(setting: str) -> FrozenSet[str]:
     return frozenset(word.strip().lower() for word in setting.split(",") if word.strip())
 
 
+# An engine that writes punctuation (Whisper, Parakeet) closes a sentence with one of these; a
+# sentence it hears cut off it leaves open, or trails off with an ellipsis.
+SENTENCE_ENDS = (".", "?", "!")
+TRAILING_OFF = ("...", "\u2026")
+
+
+def ends_sentence(text: str) -> bool:
+    """Whether ``text`` ends with a closed sentence."""
+    text = text.rstrip()
+    return text.endswith(SENTENCE_ENDS) and not text.endswith(TRAILING_OFF)
+
+
 def is_complete(text: str, previous: Optional[str], grammar_mode: bool, answers: FrozenSet[str]) -> bool:
     """Whether a speculation's text is a whole answer, so the turn may end early: in grammar mode
-    any text (the engine only gives whole phrases of the grammar); otherwise one of ``answers``,
-    or the same text as the speculation before it on this utterance (more audio changed nothing)."""
+    any text (the engine only gives whole phrases of the grammar); otherwise a closed sentence,
+    one of ``answers``, or the same text as the speculation before it on this utterance (more
+    audio changed nothing)."""
+    if ends_sentence(text) and text.strip(" .?!"):
+        return True
     text = text.strip().lower()
     if not text:
         return False

@@ -54,10 +54,10 @@ class RearmingTimer:
         if timer is not None:
             timer.cancel()
 
-    def fire_if_over(self) -> None:
-        """Under the lock: call ``on_due`` now if the clock has reached ``due()`` but the timer has
-        not fired yet (its thread is late: a busy machine)."""
-        if self._timer is not None and self.clock.now() >= self.due():
+    def fire_if_over(self, at: float) -> None:
+        """Under the lock: call ``on_due`` now if ``at`` (a block's arrival) is past ``due()`` but
+        the timer has not fired yet (its thread is late: a busy machine)."""
+        if self._timer is not None and at >= self.due():
             self.cancel()
             self.on_due()
 
@@ -82,10 +82,16 @@ class TurnTaking:
         lock: threading.Lock,
         on_pause_end: Callable[[], None],
         on_gap: Callable[[], None],
+        on_speculated: Callable[[int, bool], None],
     ) -> None:
-        """``on_pause_end`` closes the utterance; ``on_gap`` may speculate (both under ``lock``)."""
+        """``on_pause_end`` closes the utterance; ``on_gap`` may speculate or decide on the end of
+        speech; ``on_speculated`` hears of each speculation on the utterance being collected (its
+        samples, whether its text is complete). All three are called under ``lock``."""
         self._config = config
         self._clock = clock
+        self._on_speculated = on_speculated
+        # With end_of_speech, no block for that long is heard as the end of speech.
+        self._gap_seconds = config.end_of_speech or config.speculation_gap
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
@@ -99,11 +105,25 @@ class TurnTaking:
         if self._config.speculative_recognition:
             self._gap.arm()
 
-    def end_pause_if_over(self) -> None:
-        """Before a block is taken: if the pause after the latest block is over, the utterance ends
-        now, although its timer has not fired yet, so the block starts the next utterance. Where
+    def end_pause_if_over(self, arrival: float) -> None:
+        """Before a block that arrived at ``arrival`` is taken: if the pause after the latest block
+        was over by then, the utterance ends now, although its timer has not fired yet, so the
+        block starts the next utterance; and if the gap was over, it has passed (on_gap). Where
         utterances end then depends on when blocks arrive, never on how late a timer thread runs."""
-        self._pause.fire_if_over()
+        self._pause.fire_if_over(arrival)
+        if self._config.end_of_speech:
+            self._gap.fire_if_over(arrival)
+
+    def speculated(self, samples: int, complete: bool) -> None:
+        """A speculation on the first ``samples`` of the utterance being collected ended; with a
+        complete text the turn may end early (early_pause)."""
+        if complete:
+            self.end_early()
+        self._on_speculated(samples, complete)
+
+    def pause_again(self) -> None:
+        """The pause's end waited for a decision: it ends on the clock's next turn if it is over."""
+        self._pause.arm()
 
     def end_early(self) -> None:
         """A speculation found a complete answer: the turn ends after early_pause (when set)."""
@@ -131,7 +151,7 @@ class TurnTaking:
         return self.last_arrival + pause
 
     def _gap_due(self) -> float:
-        return self.last_arrival + self._config.speculation_gap
+        return self.last_arrival + self._gap_seconds
 
     def _pause_ended(self, close: Callable[[], None]) -> Callable[[], None]:
         def ended() -> None:

@@ -93,6 +93,16 @@ def test_dev_zero_is_refused_without_filling_memory() -> None:
             "f.ini: min_utterance_length 12.0 s is longer than max_utterance_length 10.0 s: no utterance would "
             "ever be transcribed",
         ),
+        (
+            "end_of_speech 0.3\nearly_pause 0.5",
+            "f.ini: end_of_speech 0.3 s needs speculative_recognition true and early_pause 0, and must be less "
+            "than speech_pause_period (1.5 s)",
+        ),
+        (
+            "end_of_speech 2",
+            "f.ini: end_of_speech 2.0 s needs speculative_recognition true and early_pause 0, and must be less "
+            "than speech_pause_period (1.5 s)",
+        ),
     ],
 )
 def test_values_that_do_not_work_together_are_refused(text: str, message: str) -> None:

@@ -146,8 +146,8 @@ class Turn:
     def gap_passed(self) -> bool:
         return self.paused
 
-    def end_early(self) -> None:
-        self.ended_early += 1
+    def speculated(self, samples: int, complete: bool) -> None:
+        self.ended_early += complete
 
 
 @dataclasses.dataclass

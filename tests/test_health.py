@@ -218,6 +218,7 @@ def test_the_status_lists_the_screens_discard_reasons() -> None:
         "utterances discarded: disabled",
         "utterances discarded: too_short",
         "utterances discarded: below_vad_threshold",
+        "utterances discarded: no_speech_after_turn",
         "utterances discarded: backlog",
     ]
 

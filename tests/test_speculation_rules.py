@@ -370,7 +370,15 @@ ENDS_TURN = {
         NO_ANSWERS, None, [("go", False), ("go left", False), ("go left", True)]
     ),
     "the_same_capitalised_text_twice_ends_the_turn": Said(
-        NO_ANSWERS, None, [("Go left.", False), ("Go left.", True)]
+        NO_ANSWERS, None, [("Go left", False), ("Go left", True)]
+    ),
+    "a_sentence_the_engine_closes_ends_the_turn": Said(
+        NO_ANSWERS, None, [("Go left.", True), ("Where am I?", True), ("Stop!", True)]
+    ),
+    "a_sentence_left_open_or_trailing_off_does_not": Said(
+        NO_ANSWERS,
+        None,
+        [("Go to the", False), ("Go to the...", False), ("Go to\u2026", False), (" . ", False)],
     ),
     "an_empty_text_never_ends_the_turn_even_twice_or_in_grammar_mode": Said(
         NO_ANSWERS, COMMANDS, [("  ", False), ("  ", False)]

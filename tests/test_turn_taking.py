@@ -196,11 +196,10 @@ def test_a_timer_over_due_fires_when_asked_and_its_late_thread_then_does_nothing
     fired: List[float] = []
     timer = RearmingTimer(clock, lock, lambda: 2.0, lambda: fired.append(clock.now()))
     timer.arm()
-    clock.time = 1.999
-    timer.fire_if_over()
+    timer.fire_if_over(1.999)
     assert fired == []
     clock.time = 2.0  # due, but its thread has not run (a busy machine)
-    timer.fire_if_over()
+    timer.fire_if_over(2.0)
     assert fired == [2.0]
     assert not timer.armed
     clock.callbacks[0]()  # the late thread runs at last
@@ -211,8 +210,7 @@ def test_fire_if_over_leaves_an_unarmed_timer_alone() -> None:
     clock = ManualClock()
     fired: List[float] = []
     timer = RearmingTimer(clock, threading.Lock(), lambda: 2.0, lambda: fired.append(clock.now()))
-    clock.time = 3.0
-    timer.fire_if_over()
+    timer.fire_if_over(3.0)
     assert fired == []
 
 
@@ -233,7 +231,7 @@ class Turn:
         self.gaps: List[float] = []
         self.gap_passed_at_gap: List[bool] = []
         self.held_lock: List[bool] = []
-        self.turn = TurnTaking(config, self.clock, self.lock, self._ended, self._gap)
+        self.turn = TurnTaking(config, self.clock, self.lock, self._ended, self._gap, lambda *_: None)
 
     def _ended(self) -> None:
         self.ends.append(self.clock.now())
@@ -404,10 +402,12 @@ def test_a_block_after_the_pause_ends_the_utterance_although_the_timer_is_late(
 ) -> None:
     clock = ManualClock()  # no timer fires unless the test runs it: the timer thread is late
     turn_ends: List[float] = []
-    turn = TurnTaking(config, clock, threading.Lock(), lambda: turn_ends.append(clock.now()), lambda: None)
+    turn = TurnTaking(
+        config, clock, threading.Lock(), lambda: turn_ends.append(clock.now()), lambda: None, lambda *_: None
+    )
     turn.heard(0.0)
     if early:
         turn.end_early()
     clock.time = now
-    turn.end_pause_if_over()
+    turn.end_pause_if_over(now)
     assert turn_ends == ends

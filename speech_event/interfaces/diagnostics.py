@@ -19,6 +19,8 @@ STATUS_NAME = "speechEvent"
 # Why an utterance was not transcribed: the node was disabled, and the speech screen's reasons.
 DISCARDED_WHILE_DISABLED = "disabled"
 DISCARDED_BACKLOG = "backlog"  # dropped unrecognized to keep within max_backlog
+# The room after a turn that ended at the end of speech, with no speech heard in it (end_of_turn.py).
+DISCARDED_AFTER_SPEECH = "no_speech_after_turn"
 PARTIAL_WORKER_KEY = "partial results worker time (s)"
 
 
@@ -108,7 +110,12 @@ class NodeStatistics:
             ]
             values += [
                 KeyValue(f"utterances discarded: {reason}", str(counts.discarded.get(reason, 0)))
-                for reason in [DISCARDED_WHILE_DISABLED, *discard_reasons, DISCARDED_BACKLOG]
+                for reason in [
+                    DISCARDED_WHILE_DISABLED,
+                    *discard_reasons,
+                    DISCARDED_AFTER_SPEECH,
+                    DISCARDED_BACKLOG,
+                ]
             ]
             values.append(KeyValue("messages ignored while disabled", str(counts.ignored_while_disabled)))
             values += [

@@ -47,6 +47,7 @@ def test_the_status_counts_what_the_node_did_and_times_recognition() -> None:
         "utterances discarded: disabled": "1",
         "utterances discarded: too_short": "1",
         "utterances discarded: below_vad_threshold": "0",
+        "utterances discarded: no_speech_after_turn": "0",
         "utterances discarded: backlog": "0",
         "messages ignored while disabled": "1",
         "rejected messages: empty": "1",

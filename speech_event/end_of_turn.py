@@ -1,0 +1,102 @@
+"""End of turn at the end of speech (``end_of_speech``, issue 44): the turn ends where the speech
+ended, as soon as the text up to there is complete, not ``speech_pause_period`` after the last block.
+
+Where: ``end_of_speech`` seconds of non-speech heard after the speech in the samples
+(speech_end.py), cut a little after its last frame; or no block for that long (soundDetection's
+gate sends blocks only while it hears speech), cut after the last block. Whether: a speculation
+transcribes the utterance up to the cut, and the turn ends there when its text is complete (a
+phrase of the grammar in force; in free speech a sentence the engine closes or one of
+``complete_answers``: speculation.py). What follows the cut is room sound: it is dropped, and the
+next block starts the next utterance.
+
+While a decision is pending, the blocks that arrive are held, in order with their arrival times,
+and taken when it is made: the turn ends where the audio says, whether the engine decides in 50 ms
+or in 2 s. The pause that ends the utterance waits for the decision too. So the same audio arriving
+at the same times gives the same utterances and the same texts, at any load.
+"""
+
+from dataclasses import dataclass
+from typing import List, Optional
+
+import numpy as np
+
+from speech_event.config import SpeechEventConfig
+from speech_event.speech_end import SpeechEnds
+
+
+@dataclass(frozen=True)
+class HeldBlock:
+    """A block that arrived while a decision was pending."""
+
+    samples: np.ndarray
+    arrival: float
+
+
+class EndOfTurn:
+    """The decisions on the utterance being collected, and the blocks held meanwhile. Every method
+    is called under the node's lock."""
+
+    def __init__(self, config: SpeechEventConfig) -> None:
+        self.on = config.end_of_speech > 0
+        self._ends = SpeechEnds(config.sample_rate, config.end_of_speech or config.speech_pause_period)
+        self.deciding: Optional[int] = None  # the cut being decided: samples of the utterance
+        self._decided = 0  # the last cut decided on this utterance: no cut is decided twice
+        self._held: List[HeldBlock] = []
+        self.close_waits = False  # the pause ended while a decision was pending
+        self._after_cut = False  # the utterance being collected follows a cut at the end of speech
+
+    def heard(self, samples: np.ndarray) -> None:
+        """The utterance being collected took these samples."""
+        if self.on:
+            self._ends.add(samples)
+
+    def cut_at_length(self, rest: np.ndarray) -> None:
+        """The utterance was cut at the length limit; ``rest`` begins the next (the speech goes on)."""
+        self._decided = 0
+        if self.on:
+            self._ends.restart(rest, keep_level=True)
+
+    def heard_end(self) -> Optional[int]:
+        """A cut to decide, heard in the samples: end_of_speech of non-speech follows the speech."""
+        return self._new(self._ends.heard_end() if self.on else None)
+
+    def gap_end(self) -> Optional[int]:
+        """A cut to decide when no block came for end_of_speech: after the last block, if speech
+        was heard."""
+        heard = self.on and self._ends.heard_speech()
+        return self._new(self._ends.samples if heard else None)
+
+    def _new(self, cut: Optional[int]) -> Optional[int]:
+        if cut is None or self.deciding is not None or cut <= self._decided:
+            return None
+        return cut
+
+    def decide(self, cut: int) -> None:
+        """A speculation on the utterance's first ``cut`` samples decides whether the turn ends."""
+        self.deciding = self._decided = cut
+
+    def hold(self, samples: np.ndarray, arrival: float) -> None:
+        """A block that arrived while deciding: taken once the decision is made."""
+        self._held.append(HeldBlock(samples, arrival))
+
+    def decided(self) -> List[HeldBlock]:
+        """The decision is made: the blocks held meanwhile, to take in order."""
+        self.deciding, self.close_waits = None, False
+        held, self._held = self._held, []
+        return held
+
+    def closed(self, at_cut: bool) -> None:
+        """The utterance ended (``at_cut``: at the end of its speech); the next starts afresh."""
+        self._after_cut, self._decided = at_cut, 0
+        if self.on:
+            self._ends.restart(np.zeros(0, dtype=np.float32), keep_level=at_cut)
+
+    def dropped(self) -> None:
+        """The utterance and the blocks held are thrown away (the node is disabled or stops)."""
+        self.decided()
+        self.closed(at_cut=False)
+
+    def worth_transcribing(self) -> bool:
+        """Whether the utterance ending now is transcribed: not when it follows a cut at the end of
+        speech and no speech was heard in it (the room after the speaker stopped)."""
+        return not (self.on and self._after_cut and not self._ends.heard_speech())

@@ -1,0 +1,84 @@
+"""Where the speech in the utterance so far ended, heard in its samples (issue 44).
+
+soundDetection's driver sends a second of room sound after speech, and in a noisy room the robot's
+lenient gate passes noise blocks: blocks keep coming after the last word, so no pause in their
+arrival tells the end. This finds it in the audio: 20 ms frames from the utterance's first sample,
+a frame is speech when its energy is 9 dB above the utterance's quietest frame (stationary room
+noise stays under that) and within 30 dB of the loudest frame heard from this speaker (a voice's
+quietest sounds). The speech has ended once ``hangover`` seconds of frames that are not speech
+follow a speech frame; the cut keeps ``pad`` seconds after it (a word's quiet tail).
+
+Every decision is a function of the samples alone, in float64: the same audio gives the same end
+whatever blocks it came in, on every CPU, at any load.
+"""
+
+import math
+from typing import List, Optional
+
+import numpy as np
+
+FRAME_SECONDS = 0.02
+# Frame energies (mean squares): speech is above both bounds.
+ABOVE_FLOOR = 8.0  # 9 dB over the quietest frame of the utterance
+BELOW_LEVEL = 1e-3  # 30 dB under the loudest frame heard
+PAD_SECONDS = 0.15
+
+
+class SpeechEnds:
+    """The frames of the utterance being collected, and where its speech ended."""
+
+    def __init__(self, sample_rate: int, hangover: float) -> None:
+        self._frame = max(1, int(FRAME_SECONDS * sample_rate))
+        self._hangover_frames = max(1, math.ceil(hangover / FRAME_SECONDS - 1e-9))
+        self._pad = round(min(PAD_SECONDS, hangover) * sample_rate)
+        self._energies: List[float] = []
+        self._rest = np.zeros(0, dtype=np.float64)
+        self.samples = 0  # taken so far
+        # The loudest frame of this speaker: kept across a cut at the end of speech, so that the
+        # room sound after it is not measured against itself.
+        self.level = 0.0
+
+    def add(self, samples: np.ndarray) -> None:
+        """The next samples of the utterance."""
+        audio = np.concatenate([self._rest, np.asarray(samples, dtype=np.float64)])
+        whole = audio.size // self._frame * self._frame
+        if whole:
+            energies = np.mean(np.square(audio[:whole]).reshape(-1, self._frame), axis=1)
+            self._energies.extend(energies.tolist())
+            self.level = max(self.level, float(energies.max()))
+        self._rest = audio[whole:]
+        self.samples += int(np.asarray(samples).size)
+
+    def restart(self, audio: np.ndarray, keep_level: bool) -> None:
+        """A new utterance begins with ``audio``; ``keep_level``: the same speaker goes on."""
+        level = self.level if keep_level else 0.0
+        self._energies, self._rest, self.samples, self.level = [], self._rest[:0], 0, level
+        self.add(audio)
+
+    def _speech(self) -> np.ndarray:
+        energies = np.array(self._energies)
+        threshold = max(float(energies.min()) * ABOVE_FLOOR, self.level * BELOW_LEVEL)
+        return np.asarray(energies > threshold)
+
+    def heard_speech(self) -> bool:
+        """Whether any frame so far is speech."""
+        return bool(self._energies) and bool(self._speech().any())
+
+    def _last_speech_frame(self) -> Optional[int]:
+        if not self._energies:
+            return None
+        speech = np.flatnonzero(self._speech())
+        return int(speech[-1]) if speech.size else None
+
+    def end(self) -> Optional[int]:
+        """Where to cut the speech heard so far, however little follows it (None: no speech):
+        ``pad`` after its last frame, within the samples taken."""
+        last = self._last_speech_frame()
+        return None if last is None else min((last + 1) * self._frame + self._pad, self.samples)
+
+    def heard_end(self) -> Optional[int]:
+        """end(), once ``hangover`` of non-speech follows the speech (None: not yet)."""
+        last = self._last_speech_frame()
+        if last is None or len(self._energies) - 1 - last < self._hangover_frames:
+            return None
+        return self.end()

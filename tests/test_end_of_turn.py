@@ -1,0 +1,119 @@
+"""End of turn at the end of speech (``end_of_speech``, speech_event/end_of_turn.py) through the
+node on the fake clock: the turn ends where the speech ended once the text up to there is complete,
+the room after it is not transcribed, speech that goes on is kept, and however long the engine
+takes, the same blocks give the same texts."""
+
+import dataclasses
+from typing import List, Tuple
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fixtures.audio import noise, speak_tones
+from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
+from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
+from speech_event.messages import SetGrammarRequest
+from speech_event.recognizers.tones import ToneRecognizer
+from tests.helpers.rig import AT_16K, Rig
+
+RATE = 16000
+BLOCK = 1024  # 64 ms
+# Health checks each second: /diagnostics counts the utterances discarded.
+CONFIG = dataclasses.replace(AT_16K, end_of_speech=0.3, partial_period=0.0, health_check_period=1.0)
+COMMANDS = "go to the kitchen|stop|yes"
+
+
+def _room(seconds: float, seed: int = 0) -> np.ndarray:
+    return noise(int(seconds * RATE), -50.0, np.random.default_rng(seed))
+
+
+def _speech(*parts: object) -> np.ndarray:
+    """Words (str, in the tones voice) and seconds of room sound (float), one after the other."""
+    pieces = [
+        speak_tones(part, RATE) if isinstance(part, str) else _room(float(part), seed=index)  # type: ignore[arg-type]
+        for index, part in enumerate(parts)
+    ]
+    return np.concatenate(pieces).astype(np.float32)
+
+
+def _run(config: object, audio: np.ndarray, grammar: str = COMMANDS, job_seconds: float = 0.0) -> Rig:
+    rig = Rig(config, ToneRecognizer(), job_seconds=job_seconds)  # type: ignore[arg-type]
+    if grammar:
+        assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
+    rig.speak(audio, BLOCK)
+    rig.clock.advance(config.speech_pause_period + job_seconds * 4 + 1.0)  # type: ignore[attr-defined]
+    return rig
+
+
+def _timed(rig: Rig) -> List[Tuple[float, str]]:
+    return [(round(when, 6), text) for when, text in rig.published]
+
+
+def _discarded_after_speech(rig: Rig) -> int:
+    values = {value.key: value.value for value in rig.diagnostics[-1].status[0].values}
+    return int(values[f"utterances discarded: {DISCARDED_AFTER_SPEECH}"])
+
+
+def test_a_command_is_published_when_the_speech_ends_not_after_the_room_sound_and_the_pause() -> None:
+    audio = _speech("stop", 1.0)
+    speech_ends = speak_tones("stop", RATE).size  # its trailing gap is silence: the room follows it
+    ended = _run(CONFIG, audio)
+    waited = _run(dataclasses.replace(CONFIG, end_of_speech=0.0), audio)
+    # Heard 0.3 s of room after the word: the block that holds that sample, on the block clock.
+    heard = speech_ends - int(0.09 * RATE) + int(0.3 * RATE)
+    heard_block = -(-heard // BLOCK)
+    assert _timed(ended) == [(round(heard_block * BLOCK / RATE, 6), "stop")]
+    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    assert _timed(waited) == [(round(last_block + CONFIG.speech_pause_period, 6), "stop")]
+
+
+def test_the_room_after_the_turn_is_not_transcribed() -> None:
+    rig = _run(CONFIG, _speech("stop", 1.0))
+    assert rig.texts() == ["stop"]
+    assert _discarded_after_speech(rig) == 1
+
+
+def test_a_pause_inside_a_phrase_does_not_end_the_turn_when_the_words_so_far_are_no_phrase() -> None:
+    rig = _run(CONFIG, _speech("go", 0.5, "to the kitchen", 1.0))
+    assert rig.texts() == ["go to the kitchen"]
+
+
+def test_speech_after_a_complete_phrase_is_the_next_utterance() -> None:
+    rig = _run(CONFIG, _speech("stop", 0.5, "yes", 1.0))
+    assert rig.texts() == ["stop", "yes"]
+
+
+def test_in_free_speech_a_complete_answer_ends_the_turn_and_other_words_wait_for_the_pause() -> None:
+    answer = _run(CONFIG, _speech("yes", 1.0), grammar="")
+    other = _run(CONFIG, _speech("maybe", 1.0), grammar="")
+    assert [text for _, text in answer.published] == ["yes"]
+    assert [text for _, text in other.published] == ["maybe"]
+    assert answer.published[0][0] < 1.0 < other.published[0][0]
+
+
+def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_last() -> None:
+    audio = _speech("stop")
+    rig = _run(CONFIG, audio)
+    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    assert _timed(rig) == [(round(last_block + CONFIG.end_of_speech, 6), "stop")]
+
+
+SAID: List[Tuple[object, ...]] = [
+    ("stop", 1.0),
+    ("go", 0.5, "to the kitchen", 0.4),
+    ("stop", 0.35, "yes", 0.31, "stop", 1.0),
+    ("yes", 0.2, "stop", 0.6, "go", 0.32, "to the kitchen"),
+]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.sampled_from(SAID), st.sampled_from([COMMANDS, ""]), st.floats(0.0, 2.5))
+def test_however_long_the_engine_takes_the_same_blocks_give_the_same_texts(
+    said: Tuple[object, ...], grammar: str, job_seconds: float
+) -> None:
+    audio = _speech(*said)
+    at_once = _run(CONFIG, audio, grammar)
+    slow = _run(CONFIG, audio, grammar, job_seconds)
+    assert slow.texts() == at_once.texts()
+    assert _discarded_after_speech(slow) == _discarded_after_speech(at_once)
