@@ -51,9 +51,9 @@ class UtteranceSoFar:
     recognizer: Recognizer  # the engine and grammar in force
     grammar: Optional[Grammar]
     origin: TextOrigin  # of a text of it so far
-    # The cut a decision on the end of speech waits for (end_of_turn.py): the speculation then is
-    # on the samples up to it, whatever the gap. None: no decision pending.
-    deciding: Optional[int] = None
+    # With end_of_speech, where the speech so far ends (end_of_turn.py): a speculation is on the
+    # samples up to it, at once, whatever the gap. None: the speaker is still speaking, or off.
+    cut: Optional[int] = None
 
 
 class Turn(Protocol):
@@ -63,9 +63,13 @@ class Turn(Protocol):
         """Whether the speaker has paused for speculation_gap since the latest block."""
         ...
 
+    def end_early(self) -> None:
+        """A speculation found a complete answer: the turn ends after early_pause."""
+        ...
+
     def speculated(self, samples: int, complete: bool) -> None:
-        """A speculation on the first ``samples`` of the utterance being collected ended (its
-        text complete or not): the turn may end early."""
+        """A speculation on the first ``samples`` of the utterance being collected ended, its text
+        complete by itself or not: a decision on the end of speech may wait for it."""
         ...
 
 
@@ -94,9 +98,10 @@ class BackgroundRuns:
 
     # -- what the node tells them -------------------------------------------------------------------
 
-    def more_audio(self) -> None:
-        """A block arrives: the speculation's audio is no longer the utterance."""
-        self._speculation.drop()
+    def more_audio(self, cut: Optional[int]) -> None:
+        """A block was taken: the speculation's audio is no longer the utterance, unless it is the
+        audio up to ``cut``, where the speech so far ends (end_of_speech)."""
+        self._speculation.drop(keep=cut)
 
     def utterance_started(self, when: float) -> None:
         """An utterance's first block came at ``when``: its first partial is due a period later."""
@@ -155,6 +160,11 @@ class BackgroundRuns:
         self.speculate()
         self.partial()
 
+    def completed_on(self, samples: int) -> Optional[bool]:
+        """Whether the finished speculation on the first ``samples`` is complete by itself (None:
+        there is none yet)."""
+        return self._speculation.completed_on(samples)
+
     def running_for(self, job: RecognitionJob) -> bool:
         """Whether ``job``'s recognition is an adopted speculation that runs now."""
         return self._speculation.running_for(job)
@@ -164,12 +174,14 @@ class BackgroundRuns:
     def speculate(self) -> None:
         """Speculate on the utterance being collected if its gap has passed and the rules allow it."""
         so_far = self.so_far()
-        if so_far is None or (so_far.deciding is None and not self.turn.gap_passed()):
+        if so_far is None or (so_far.cut is None and not self.turn.gap_passed()):
             return
+        if so_far.cut is not None:  # one on other audio is worthless: the cut moved since
+            self._speculation.drop(keep=so_far.cut)
         if not self._speculation.may_start(so_far.recognizer, self.worker_idle()):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
-        audio = so_far.audio()[: so_far.deciding]
+        audio = so_far.audio()[: so_far.cut]
         speculation = self._speculation.start(audio.size, so_far.recognizer, so_far.grammar)
         job = functools.partial(self._speculated, speculation, audio, so_far.origin)
         speculation.handle = self.worker.executor.submit(job)
@@ -211,14 +223,16 @@ class BackgroundRuns:
         with self.lock:
             job = self._speculation.finished(speculation, outcome)
             if job is None and not speculation.cancelled:
-                self.turn.speculated(speculation.samples, self._speculation.ends_turn(speculation))
+                if self._speculation.ends_turn(speculation):
+                    self.turn.end_early()
+                self.turn.speculated(speculation.samples, speculation.complete)
                 if speculation.adopted is None:  # the utterance so far: its text is a partial too
                     partial = self._partials.spoken(speculation.samples, outcome.answer)
         if job is not None:
             self.worker.publication.conclude(job, outcome)
             with self.lock:  # the worker is free: a decision on the end of speech may wait for it
                 so_far = self.so_far()
-                if so_far is not None and so_far.deciding is not None:
+                if so_far is not None and so_far.cut is not None:
                     self.speculate()
         elif partial is not None:
             self.worker.publication.partial(partial, origin)

@@ -92,7 +92,8 @@ class SpeechEventConfig:
     complete_answers: str = "yes,no,yego,oya"
     # End of turn at the end of speech (speech_event/end_of_turn.py): once this long of non-speech
     # follows the speech in the audio (or no block came for this long), the turn ends there if
-    # the text up to there is complete; 0: off.
+    # the text up to there is complete; 0: off. It decides by speculating: off without
+    # speculative_recognition, and early_pause (the older opt-in) takes its place when set.
     end_of_speech: float = 0.0
     # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
     # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
@@ -103,6 +104,13 @@ MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
 QUANTIZATIONS = ("none", "int8")
 # Partial results more often than this would only keep the worker busy: no one reads that fast.
 SHORTEST_PARTIAL_PERIOD = 0.1
+
+
+def ends_at_end_of_speech(config: SpeechEventConfig) -> bool:
+    """Whether the turn ends at the end of speech (end_of_speech, with what it needs)."""
+    return config.end_of_speech > 0 and config.speculative_recognition and not config.early_pause
+
+
 # soundDetection's block: 4096 samples (85 ms at 48 kHz); blocks of one utterance come this far apart.
 SOUND_DETECTION_BLOCK = 4096
 
@@ -132,14 +140,15 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"speculation_gap ({config.speculation_gap} s) to less than speech_pause_period "
             f"({config.speech_pause_period} s)"
         )
-    if config.end_of_speech and not (
-        config.speculative_recognition
-        and not config.early_pause
-        and config.end_of_speech < config.speech_pause_period
-    ):
+    if 0 < config.end_of_speech <= block:
         return (
-            f"end_of_speech {config.end_of_speech} s needs speculative_recognition true and early_pause 0, "
-            f"and must be less than speech_pause_period ({config.speech_pause_period} s)"
+            f"end_of_speech {config.end_of_speech} s is not longer than {one_block}: the gaps between "
+            "blocks would be heard as the end of speech; 0 turns it off"
+        )
+    if config.end_of_speech >= config.speech_pause_period:
+        return (
+            f"end_of_speech {config.end_of_speech} s must be less than speech_pause_period "
+            f"({config.speech_pause_period} s): 0 turns it off"
         )
     if 0 < config.partial_period < SHORTEST_PARTIAL_PERIOD:
         return (

@@ -6,8 +6,10 @@ Where: ``end_of_speech`` seconds of non-speech heard after the speech in the sam
 gate sends blocks only while it hears speech), cut after the last block. Whether: a speculation
 transcribes the utterance up to the cut, and the turn ends there when its text is complete (a
 phrase of the grammar in force; in free speech a sentence the engine closes or one of
-``complete_answers``: speculation.py). What follows the cut is room sound: it is dropped, and the
-next block starts the next utterance.
+``complete_answers``: speculation.py). The speculation starts as soon as the audio up to the cut
+is there, before the end is heard, so its text is often ready when the decision comes; more
+blocks cancel it only when they move the cut (speech goes on). What follows the cut is room
+sound: it is dropped, and the next block starts the next utterance.
 
 While a decision is pending, the blocks that arrive are held, in order with their arrival times,
 and taken when it is made: the turn ends where the audio says, whether the engine decides in 50 ms
@@ -20,7 +22,7 @@ from typing import List, Optional
 
 import numpy as np
 
-from speech_event.config import SpeechEventConfig
+from speech_event.config import SpeechEventConfig, ends_at_end_of_speech
 from speech_event.speech_end import SpeechEnds
 
 
@@ -37,7 +39,7 @@ class EndOfTurn:
     is called under the node's lock."""
 
     def __init__(self, config: SpeechEventConfig) -> None:
-        self.on = config.end_of_speech > 0
+        self.on = ends_at_end_of_speech(config)
         self._ends = SpeechEnds(config.sample_rate, config.end_of_speech or config.speech_pause_period)
         self.deciding: Optional[int] = None  # the cut being decided: samples of the utterance
         self._decided = 0  # the last cut decided on this utterance: no cut is decided twice
@@ -59,6 +61,14 @@ class EndOfTurn:
     def heard_end(self) -> Optional[int]:
         """A cut to decide, heard in the samples: end_of_speech of non-speech follows the speech."""
         return self._new(self._ends.heard_end() if self.on else None)
+
+    def speculation_cut(self) -> Optional[int]:
+        """Where a speculation may transcribe up to before the end is heard (its pad taken), so its
+        text is there when the decision comes; None while speech goes on."""
+        if self.on and self.deciding is None:
+            cut = self._ends.padded_end()
+            return cut if cut is not None and cut > self._decided else None
+        return self.deciding
 
     def gap_end(self) -> Optional[int]:
         """A cut to decide when no block came for end_of_speech: after the last block, if speech

@@ -239,7 +239,6 @@ class SpeechEventNode:
         if self._end.deciding is not None:
             self._end.hold(samples, arrival)
             return
-        self._background.more_audio()
         if self._assembler.pending_samples == 0:
             self._collecting_since = arrival
             self._action.utterance_started(arrival)
@@ -254,9 +253,14 @@ class SpeechEventNode:
             self._end.cut_at_length(self._assembler.peek())
         else:
             self._end.heard(samples)
+        self._background.more_audio(self._end.speculation_cut())
         self._turn.heard(arrival)
         self._background.heard()
-        self._decide(self._end.heard_end())
+        cut = self._end.heard_end()
+        if cut is not None:
+            self._decide(cut)
+        elif self._end.speculation_cut() is not None:
+            self._background.speculate()  # the speech may have ended: its text is ready sooner
 
     def _gap_passed(self) -> None:
         """Under the lock: no block came for the gap; with end_of_speech that is the end of speech."""
@@ -266,8 +270,13 @@ class SpeechEventNode:
     def _decide(self, cut: Optional[int]) -> None:
         """Under the lock: a speculation on the utterance up to ``cut`` decides whether the turn
         ends there (with an engine that can be stopped: one that cannot does not speculate)."""
-        if cut is not None and self._enabled and isinstance(self._recognizer, Stoppable):
-            self._end.decide(cut)
+        if cut is None or not self._enabled or not isinstance(self._recognizer, Stoppable):
+            return
+        self._end.decide(cut)
+        complete = self._background.completed_on(cut)
+        if complete is not None:  # the speculation on that audio has finished already
+            self._decided(complete)
+        else:
             self._background.speculate()
 
     def _speculated(self, samples: int, complete: bool) -> None:
@@ -320,7 +329,12 @@ class SpeechEventNode:
         first = self._collecting_since if self._collecting_since is not None else last
         origin = TextOrigin(self._language, engine_name(self._recognizer), first, last)
         return UtteranceSoFar(
-            pending, self._assembler.peek, self._recognizer, self._grammar, origin, self._end.deciding
+            pending,
+            self._assembler.peek,
+            self._recognizer,
+            self._grammar,
+            origin,
+            self._end.speculation_cut(),
         )
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:

@@ -49,6 +49,9 @@ class Speculation:
         # The closed utterance this speculation turned out to be: its outcome is that utterance's.
         self.adopted: Optional[RecognitionJob] = None
         self.watchdog: Optional[Timer] = None  # recognition_timeout, once adopted while running
+        # Whether its text is complete by itself (no comparison with the speculation before it,
+        # which depends on which speculations ran): what a decision on the end of speech takes.
+        self.complete = False
 
     def is_for(self, job: RecognitionJob) -> bool:
         """Whether a closed utterance is exactly the audio this speculation transcribes, for the
@@ -94,11 +97,12 @@ class SpeculationRules:
         self.counts.started += 1
         return self.current
 
-    def drop(self) -> None:
+    def drop(self, keep: Optional[int] = None) -> None:
         """The speculation being collected for is worthless now (not one that a closed utterance
-        adopted: that one is its recognition)."""
+        adopted: that one is its recognition; nor one on the first ``keep`` samples, the audio a
+        decision on the end of speech will cut at)."""
         speculation = self.current
-        if speculation is None or speculation.adopted is not None:
+        if speculation is None or speculation.adopted is not None or speculation.samples == keep:
             return
         self.current = None
         speculation.cancel()
@@ -137,6 +141,9 @@ class SpeculationRules:
             self.counts.wasted_seconds += outcome.took
             return None
         speculation.outcome = outcome
+        transcript = proper_transcript(outcome.answer)
+        text = transcript.text if transcript is not None else ""
+        speculation.complete = is_complete(text, None, speculation.grammar is not None, self._answers)
         job = speculation.adopted
         if job is not None:
             self.current = None
@@ -155,6 +162,14 @@ class SpeculationRules:
         complete = is_complete(text, self._last_text, speculation.grammar is not None, self._answers)
         self._last_text = text.strip().lower()  # as is_complete compares it
         return complete
+
+    def completed_on(self, samples: int) -> Optional[bool]:
+        """Whether the finished speculation on the first ``samples`` is complete by itself; None
+        when there is none (not finished, on other audio, or none at all)."""
+        speculation = self.current
+        if speculation is None or speculation.adopted is not None or speculation.outcome is None:
+            return None
+        return speculation.complete if speculation.samples == samples else None
 
     def running_for(self, job: RecognitionJob) -> bool:
         """Whether ``job``'s recognition is a speculation that runs now."""

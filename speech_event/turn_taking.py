@@ -14,7 +14,7 @@ import threading
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-from speech_event.config import SpeechEventConfig
+from speech_event.config import SpeechEventConfig, ends_at_end_of_speech
 from speech_event.ports import TIMER_TOLERANCE, Clock, Timer
 
 
@@ -91,7 +91,8 @@ class TurnTaking:
         self._clock = clock
         self._on_speculated = on_speculated
         # With end_of_speech, no block for that long is heard as the end of speech.
-        self._gap_seconds = config.end_of_speech or config.speculation_gap
+        self._ends_at_end_of_speech = ends_at_end_of_speech(config)
+        self._gap_seconds = config.end_of_speech if self._ends_at_end_of_speech else config.speculation_gap
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
@@ -111,14 +112,12 @@ class TurnTaking:
         block starts the next utterance; and if the gap was over, it has passed (on_gap). Where
         utterances end then depends on when blocks arrive, never on how late a timer thread runs."""
         self._pause.fire_if_over(arrival)
-        if self._config.end_of_speech:
+        if self._ends_at_end_of_speech:
             self._gap.fire_if_over(arrival)
 
     def speculated(self, samples: int, complete: bool) -> None:
-        """A speculation on the first ``samples`` of the utterance being collected ended; with a
-        complete text the turn may end early (early_pause)."""
-        if complete:
-            self.end_early()
+        """A speculation on the first ``samples`` of the utterance being collected ended, its text
+        complete by itself or not: a decision on the end of speech may wait for it."""
         self._on_speculated(samples, complete)
 
     def pause_again(self) -> None:

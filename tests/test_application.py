@@ -94,14 +94,13 @@ def test_dev_zero_is_refused_without_filling_memory() -> None:
             "ever be transcribed",
         ),
         (
-            "end_of_speech 0.3\nearly_pause 0.5",
-            "f.ini: end_of_speech 0.3 s needs speculative_recognition true and early_pause 0, and must be less "
-            "than speech_pause_period (1.5 s)",
+            "end_of_speech 0.05",
+            "f.ini: end_of_speech 0.05 s is not longer than one 4096-sample block at sample_rate 48000 Hz "
+            "(0.085 s): the gaps between blocks would be heard as the end of speech; 0 turns it off",
         ),
         (
             "end_of_speech 2",
-            "f.ini: end_of_speech 2.0 s needs speculative_recognition true and early_pause 0, and must be less "
-            "than speech_pause_period (1.5 s)",
+            "f.ini: end_of_speech 2.0 s must be less than speech_pause_period (1.5 s): 0 turns it off",
         ),
     ],
 )

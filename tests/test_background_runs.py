@@ -146,8 +146,11 @@ class Turn:
     def gap_passed(self) -> bool:
         return self.paused
 
+    def end_early(self) -> None:
+        self.ended_early += 1
+
     def speculated(self, samples: int, complete: bool) -> None:
-        self.ended_early += complete
+        pass
 
 
 @dataclasses.dataclass
@@ -253,14 +256,14 @@ def test_a_speculation_cancels_the_partial_in_progress() -> None:
 def test_a_block_cancels_the_speculation_before_it_runs() -> None:
     rig = _speaking()
     rig.runs.speculate()
-    rig.runs.more_audio()
+    rig.runs.more_audio(None)
     assert rig.jobs.handles[0].cancelled
     assert _sizes(rig).stops == 0
 
 
 def test_a_block_while_the_speculation_runs_stops_its_engine_and_its_time_is_wasted() -> None:
     rig = _speaking()
-    _sizes(rig).during = rig.runs.more_audio
+    _sizes(rig).during = lambda: rig.runs.more_audio(None)
     rig.runs.speculate()
     rig.jobs.run_all()
     assert _sizes(rig).stops == 1
@@ -361,7 +364,7 @@ def test_a_partial_starts_again_only_when_due_and_on_more_audio() -> None:
     rig.runs.partial()
     assert rig.runs.partials.started == 1  # due, but no more audio
     rig.node.add(4096)
-    rig.runs.more_audio()
+    rig.runs.more_audio(None)
     rig.runs.heard()
     rig.clock.advance(0.0)
     rig.jobs.run_all()
@@ -370,7 +373,7 @@ def test_a_partial_starts_again_only_when_due_and_on_more_audio() -> None:
 
 def test_more_audio_does_not_cancel_a_partial_run() -> None:
     rig = _partial_started()
-    rig.runs.more_audio()
+    rig.runs.more_audio(None)
     assert not rig.jobs.handles[0].cancelled
 
 

@@ -14,11 +14,13 @@ from fixtures.audio import noise, speak_tones
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import SetGrammarRequest
-from speech_event.recognizers.tones import ToneRecognizer
+from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
+from speech_event.speech_end import AVERAGED_FRAMES
 from tests.helpers.rig import AT_16K, Rig
 
 RATE = 16000
 BLOCK = 1024  # 64 ms
+FRAME = 320  # the end of speech's 20 ms frames
 # Health checks each second: /diagnostics counts the utterances discarded.
 CONFIG = dataclasses.replace(AT_16K, end_of_speech=0.3, partial_period=0.0, health_check_period=1.0)
 COMMANDS = "go to the kitchen|stop|yes"
@@ -57,11 +59,13 @@ def _discarded_after_speech(rig: Rig) -> int:
 
 def test_a_command_is_published_when_the_speech_ends_not_after_the_room_sound_and_the_pause() -> None:
     audio = _speech("stop", 1.0)
-    speech_ends = speak_tones("stop", RATE).size  # its trailing gap is silence: the room follows it
+    tones_end = speak_tones("stop", RATE).size - int(WORD_GAP_SECONDS * RATE)  # silence, then the room
     ended = _run(CONFIG, audio)
     waited = _run(dataclasses.replace(CONFIG, end_of_speech=0.0), audio)
-    # Heard 0.3 s of room after the word: the block that holds that sample, on the block clock.
-    heard = speech_ends - int(0.09 * RATE) + int(0.3 * RATE)
+    # The last 20 ms frame the tones reach, and two more (averaged over five, they are speech
+    # too); then 0.3 s of frames of the room: the block that holds them, on the block clock.
+    speech_ends = ((tones_end - 1) // FRAME + AVERAGED_FRAMES // 2 + 1) * FRAME
+    heard = speech_ends + int(0.3 * RATE)
     heard_block = -(-heard // BLOCK)
     assert _timed(ended) == [(round(heard_block * BLOCK / RATE, 6), "stop")]
     last_block = -(-audio.size // BLOCK) * BLOCK / RATE
@@ -117,3 +121,12 @@ def test_however_long_the_engine_takes_the_same_blocks_give_the_same_texts(
     slow = _run(CONFIG, audio, grammar, job_seconds)
     assert slow.texts() == at_once.texts()
     assert _discarded_after_speech(slow) == _discarded_after_speech(at_once)
+
+
+def test_the_text_is_ready_when_the_end_is_heard_if_the_engine_takes_less_than_the_wait_after_the_pad() -> (
+    None
+):
+    audio = _speech("stop", 1.0)
+    at_once = _run(CONFIG, audio)
+    taking_a_tenth = _run(CONFIG, audio, job_seconds=0.1)  # started once the cut's pad (0.15 s) was taken
+    assert _timed(taking_a_tenth) == _timed(at_once)

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise
-from speech_event.speech_end import PAD_SECONDS, SpeechEnds
+from speech_event.speech_end import AVERAGED_FRAMES, PAD_SECONDS, SpeechEnds
 
 RATE = 16000
 FRAME = 320  # 20 ms
@@ -23,11 +23,12 @@ def _room(seconds: float, seed: int = 1) -> np.ndarray:
     return noise(int(seconds * RATE), -50.0, np.random.default_rng(seed))
 
 
-# 0.5 s of room, a word from 8000 to 12800 (frames 25 to 39), then the room again.
+# 0.5 s of room, a word from 8000 to 12800 (frames 25 to 39), then the room again. Averaged over
+# 5 frames, the word's last frame makes the next two speech too: the speech ends after frame 41.
 WORD = np.concatenate([_room(0.5), _tone(0.3, 0.5), _room(1.0, seed=2)])
-SPEECH_ENDS_AT = 12800
+SPEECH_ENDS_AT = (39 + AVERAGED_FRAMES // 2 + 1) * FRAME
 CUT = SPEECH_ENDS_AT + int(PAD_SECONDS * RATE)
-HEARD_AT = (40 + 15) * FRAME  # the samples it takes to hear 15 frames after the word
+HEARD_AT = SPEECH_ENDS_AT + 15 * FRAME  # the samples it takes to hear 15 frames after the speech
 
 
 def _first_end(audio: np.ndarray, blocks: List[int]) -> Optional[Tuple[int, int]]:
@@ -86,5 +87,12 @@ def test_a_cut_keeps_the_speakers_level_so_a_sound_30_db_under_it_is_room_after_
 
 def test_with_nothing_after_the_speech_the_cut_is_the_last_sample() -> None:
     ends = SpeechEnds(RATE, HANGOVER)
-    ends.add(WORD[:SPEECH_ENDS_AT])
-    assert ends.end() == SPEECH_ENDS_AT
+    ends.add(WORD[:12800])
+    assert ends.end() == 12800
+
+
+def test_a_sound_of_50_ms_in_the_room_is_no_speech_that_ended() -> None:
+    ends = SpeechEnds(RATE, HANGOVER)
+    ends.add(np.concatenate([_room(0.5), _tone(0.05, 0.5), _room(1.0, seed=2)]))
+    assert not ends.heard_speech()
+    assert ends.heard_end() is None
