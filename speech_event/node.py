@@ -296,10 +296,10 @@ class SpeechEventNode:
             if audio is not None:  # what follows the cut is the room after the speech: dropped
                 self._submit(audio[:cut], False, self._turn.last_arrival)
             self._end.closed(at_cut=True)
+        if close_waits and not complete:  # the pause ended meanwhile: a block held since ends it
+            self._turn.pause_again()
         for block in held:
             self._arrived(block.samples, block.arrival)
-        if close_waits and not complete:
-            self._turn.pause_again()
 
     def _undecided(self) -> None:
         """Under the lock: the speculation a decision waited for was dropped; the turn goes on."""

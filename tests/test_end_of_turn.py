@@ -4,19 +4,27 @@ the room after it is not transcribed, speech that goes on is kept, and however l
 takes, the same blocks give the same texts."""
 
 import dataclasses
+from pathlib import Path
 from typing import List, Tuple
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
+from harness.memory_runner import run_in_memory
+from harness.report import passed, report
+from harness.scenario import load_scenario
+from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import SetGrammarRequest
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.speech_end import AVERAGED_FRAMES
+from tests.helpers.every_scenario import RECOGNITION_SECONDS
 from tests.helpers.rig import AT_16K, Rig
+from tests.helpers.scenario_files import SCENARIOS
 
 RATE = 16000
 BLOCK = 1024  # 64 ms
@@ -123,6 +131,39 @@ def test_however_long_the_engine_takes_the_same_blocks_give_the_same_texts(
     assert _discarded_after_speech(slow) == _discarded_after_speech(at_once)
 
 
+WORDS = ("stop", "yes", "go", "to the kitchen", "maybe")
+
+
+def _spoken_with_gaps(
+    config: object, turns: List[Tuple[str, float]], grammar: str, job_seconds: float
+) -> Rig:
+    """Each word's blocks, then that many seconds without a block (the robot's gate)."""
+    rig = Rig(config, ToneRecognizer(), job_seconds=job_seconds)  # type: ignore[arg-type]
+    if grammar:
+        assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
+    for word, gap in turns:
+        rig.speak(speak_tones(word, RATE), BLOCK)
+        rig.clock.advance(gap)
+    rig.clock.advance(config.speech_pause_period + job_seconds * 2 * len(turns) + 1.0)  # type: ignore[attr-defined]
+    return rig
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.tuples(st.sampled_from(WORDS), st.floats(0.0, 1.2)), min_size=1, max_size=4),
+    st.sampled_from([COMMANDS, ""]),
+    st.sampled_from([0.5, 1.5]),
+    st.floats(0.0, 2.5),
+)
+def test_with_gaps_between_blocks_however_long_the_engine_takes_the_texts_are_the_same(
+    turns: List[Tuple[str, float]], grammar: str, pause: float, job_seconds: float
+) -> None:
+    config = dataclasses.replace(CONFIG, speech_pause_period=pause)
+    at_once = _spoken_with_gaps(config, turns, grammar, 0.0)
+    slow = _spoken_with_gaps(config, turns, grammar, job_seconds)
+    assert slow.texts() == at_once.texts()
+
+
 def test_the_text_is_ready_when_the_end_is_heard_if_the_engine_takes_less_than_the_wait_after_the_pad() -> (
     None
 ):
@@ -130,3 +171,19 @@ def test_the_text_is_ready_when_the_end_is_heard_if_the_engine_takes_less_than_t
     at_once = _run(CONFIG, audio)
     taking_a_tenth = _run(CONFIG, audio, job_seconds=0.1)  # started once the cut's pad (0.15 s) was taken
     assert _timed(taking_a_tenth) == _timed(at_once)
+
+
+@pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
+def test_every_scenario_passes_with_the_turn_ending_at_the_end_of_speech(
+    path: Path, recognition_seconds: float
+) -> None:
+    """What each expects (written for recognition taking no time); at 1 s the same texts as the
+    node that waits for the pause."""
+    scenario = load_scenario(str(path), SpeechEventConfig())
+    ending = dataclasses.replace(scenario, config=dataclasses.replace(scenario.config, end_of_speech=0.3))
+    outcome = run_in_memory(ending, recognition_seconds)
+    if recognition_seconds == 0.0:
+        assert passed(ending, outcome), report(ending, outcome)
+    waiting = run_in_memory(scenario, recognition_seconds)
+    assert [p.text for p in outcome.published] == [p.text for p in waiting.published]
