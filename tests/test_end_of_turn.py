@@ -13,16 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
-from harness.memory_runner import run_in_memory
-from harness.report import passed, report
-from harness.scenario import load_scenario
-from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import SetGrammarRequest
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.speech_end import AVERAGED_FRAMES
-from tests.helpers.every_scenario import RECOGNITION_SECONDS
+from tests.helpers.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
 from tests.helpers.rig import AT_16K, Rig
 from tests.helpers.scenario_files import SCENARIOS
 
@@ -178,12 +174,4 @@ def test_the_text_is_ready_when_the_end_is_heard_if_the_engine_takes_less_than_t
 def test_every_scenario_passes_with_the_turn_ending_at_the_end_of_speech(
     path: Path, recognition_seconds: float
 ) -> None:
-    """What each expects (written for recognition taking no time); at 1 s the same texts as the
-    node that waits for the pause."""
-    scenario = load_scenario(str(path), SpeechEventConfig())
-    ending = dataclasses.replace(scenario, config=dataclasses.replace(scenario.config, end_of_speech=0.3))
-    outcome = run_in_memory(ending, recognition_seconds)
-    if recognition_seconds == 0.0:
-        assert passed(ending, outcome), report(ending, outcome)
-    waiting = run_in_memory(scenario, recognition_seconds)
-    assert [p.text for p in outcome.published] == [p.text for p in waiting.published]
+    check_scenario_ending_at_end_of_speech(path, recognition_seconds)

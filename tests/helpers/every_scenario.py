@@ -9,7 +9,11 @@ and partial results on (the defaults) and with each of them off, at two recognit
 
 The run with the defaults is shared by the three: at 0 s it is the scenario's own run. The
 hermetic scenarios are checked so in tests/test_every_scenario.py, those on trained weights in
-tests/real/test_trained_scenarios.py."""
+tests/real/test_trained_scenarios.py.
+
+And with the turn ending at the end of speech (end_of_speech 0.3): what the scenario expects at
+0 s, and at 1 s the texts of the node that waits for the pause (tests/test_end_of_turn.py, and the
+trained scenarios in tests/real/test_trained_scenarios.py)."""
 
 import dataclasses
 from pathlib import Path
@@ -56,3 +60,15 @@ def check_scenario_with_and_without_speculation_and_partials(path: Path, recogni
     assert default.published == no_partials.published
     assert default.results == no_partials.results
     assert default.responses == no_partials.responses
+
+
+def check_scenario_ending_at_end_of_speech(path: Path, recognition_seconds: float) -> None:
+    """The last check above, on one scenario file at one recognition time."""
+    scenario = load_scenario(str(path), SpeechEventConfig())
+    ending = _without(scenario, end_of_speech=0.3)
+    outcome = run_in_memory(ending, recognition_seconds)
+    if recognition_seconds == 0.0:
+        assert passed(ending, outcome), report(ending, outcome)
+    else:
+        waiting = run_in_memory(scenario, recognition_seconds)
+        assert [p.text for p in outcome.published] == [p.text for p in waiting.published]

@@ -8,6 +8,7 @@ import pytest
 
 from tests.helpers.every_scenario import (
     RECOGNITION_SECONDS,
+    check_scenario_ending_at_end_of_speech,
     check_scenario_with_and_without_speculation_and_partials,
 )
 from tests.helpers.scenario_files import TRAINED_SCENARIOS
@@ -27,3 +28,8 @@ def test_every_trained_scenario_passes_and_publishes_the_same_without_speculatio
     path: Path, recognition_seconds: float
 ) -> None:
     check_scenario_with_and_without_speculation_and_partials(path, recognition_seconds)
+
+
+@pytest.mark.parametrize("path", TRAINED_SCENARIOS, ids=lambda path: path.stem)
+def test_every_trained_scenario_passes_with_the_turn_ending_at_the_end_of_speech(path: Path) -> None:
+    check_scenario_ending_at_end_of_speech(path, 0.0)
