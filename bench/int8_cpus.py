@@ -1,4 +1,5 @@
-"""int8 on the CPUs robots have: python -m bench.int8_cpus [--models tiny.en base] [--no-avx2].
+"""int8 on the CPUs robots have: python -m bench.int8_cpus [--models tiny.en base] [--no-avx2]
+[--export-scheme-only] [--cards-only].
 
 onnxruntime picks its int8 matrix kernels by CPU: AVX2's kernel for unsigned activations by signed
 weights adds pairs of products in 16 bits and can saturate; AVX-512 VNNI's does not. This writes
@@ -44,19 +45,20 @@ FP32_FILES = (
 AVX2_CPU = ["qemu-x86_64", "-cpu", "Haswell-v4"]
 
 
-def _recordings() -> List[recordings.Recording]:
-    return recordings.cards() + recordings.librivox()
+def _recordings(cards_only: bool) -> List[recordings.Recording]:
+    return recordings.cards() + ([] if cards_only else recordings.librivox())
 
 
-def transcribe(directory: Path, int8: bool) -> List[str]:
+def transcribe(directory: Path, int8: bool, cards_only: bool) -> List[str]:
     """Each recording's text by the Whisper engine on ``directory``."""
     engine = WhisperRecognizer(directory, "english", Runtime(int8=int8))
-    return [engine.transcribe(recording.samples()).text for recording in _recordings()]
+    return [engine.transcribe(recording.samples()).text for recording in _recordings(cards_only)]
 
 
-def _on_avx2(directory: Path) -> List[str]:
+def _on_avx2(directory: Path, cards_only: bool) -> List[str]:
     """transcribe(directory, int8=True) in this Python run as an AVX2 CPU."""
     command = [*AVX2_CPU, sys.executable, "-m", "bench.int8_cpus", "--transcribe", str(directory)]
+    command += ["--cards-only"] if cards_only else []
     done = subprocess.run(command, capture_output=True, text=True, check=True)
     texts: List[str] = json.loads(done.stdout.splitlines()[-1])
     return texts
@@ -71,27 +73,31 @@ def _scheme_directory(fp32: Path, scheme: Int8Scheme, folder: Path) -> Path:
     return folder
 
 
-def _wer(texts: List[str]) -> float:
-    references = " ".join(recording.text for recording in _recordings())
+def _wer(texts: List[str], cards_only: bool) -> float:
+    references = " ".join(recording.text for recording in _recordings(cards_only))
     return recordings.word_error_rate(references, " ".join(texts))
 
 
-def measure(name: str, avx2: bool, work: Path) -> None:
+def measure(name: str, avx2: bool, work: Path, schemes: Dict[str, Int8Scheme], cards_only: bool) -> None:
     fp32 = model_directory(MODELS[name])
     began = time.monotonic()
-    texts = transcribe(fp32, int8=False)
-    print(f"{name} fp32: WER {_wer(texts):.3f} ({time.monotonic() - began:.1f} s here)", flush=True)
-    for label, scheme in SCHEMES.items():
+    texts = transcribe(fp32, False, cards_only)
+    print(
+        f"{name} fp32: WER {_wer(texts, cards_only):.3f} ({time.monotonic() - began:.1f} s here)", flush=True
+    )
+    for label, scheme in schemes.items():
         directory = _scheme_directory(fp32, scheme, work / f"{name}-{scheme.unsigned}-{scheme.per_channel}")
         began = time.monotonic()
-        here = transcribe(directory, int8=True)
-        line = f"{name} int8 {label}: WER here {_wer(here):.3f} ({time.monotonic() - began:.1f} s)"
+        here = transcribe(directory, True, cards_only)
+        line = (
+            f"{name} int8 {label}: WER here {_wer(here, cards_only):.3f} ({time.monotonic() - began:.1f} s)"
+        )
         if avx2:
             began = time.monotonic()
-            there = _on_avx2(directory)
+            there = _on_avx2(directory, cards_only)
             differ = [f"{a!r} / {b!r}" for a, b in zip(here, there) if a != b]
             line += (
-                f", on AVX2 {_wer(there):.3f} ({time.monotonic() - began:.0f} s emulated); "
+                f", on AVX2 {_wer(there, cards_only):.3f} ({time.monotonic() - began:.0f} s emulated); "
                 f"{len(differ)} of {len(here)} texts differ" + "".join(f"\n    {pair}" for pair in differ)
             )
         print(line, flush=True)
@@ -101,14 +107,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models", nargs="+", choices=list(MODELS), default=["tiny.en"])
     parser.add_argument("--no-avx2", dest="avx2", action="store_false", help="only this CPU")
+    parser.add_argument("--export-scheme-only", action="store_true", help="only what export --int8 writes")
+    parser.add_argument(
+        "--cards-only", action="store_true", help="the five cards recordings (a third of the time)"
+    )
     parser.add_argument("--transcribe", type=Path, help=argparse.SUPPRESS)  # the emulated CPU's part
     arguments = parser.parse_args()
     if arguments.transcribe:
-        print(json.dumps(transcribe(arguments.transcribe, int8=True)))
+        print(json.dumps(transcribe(arguments.transcribe, True, arguments.cards_only)))
         return
+    schemes = dict(list(SCHEMES.items())[:1]) if arguments.export_scheme_only else SCHEMES
     with tempfile.TemporaryDirectory(prefix="int8_cpus_") as work:
         for name in arguments.models:
-            measure(name, arguments.avx2, Path(work))
+            measure(name, arguments.avx2, Path(work), schemes, arguments.cards_only)
 
 
 if __name__ == "__main__":
