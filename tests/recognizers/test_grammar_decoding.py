@@ -5,6 +5,8 @@ threshold, and grammars an engine cannot take."""
 from typing import Callable, Dict, List, Optional, Tuple
 
 import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_ctc_model_directory, tones_model_directory, tones_tdt_model_directory
@@ -17,6 +19,7 @@ from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.onnx.grammar_choice import (
     GrammarChoice,
     heard_as,
+    least_deciding_score,
     number_words,
     one_word_changed,
     spelt,
@@ -145,6 +148,55 @@ def test_the_choice_takes_the_free_text_when_it_is_a_phrase_else_the_best_phrase
     assert GrammarChoice("go lefts", -10.0, scores).transcript(-2.0, 0.5) == Transcript("go left", 0.5)
     assert GrammarChoice("go lefts", -10.0, scores).transcript(-1.9) == Transcript("", rejected="go left")
     assert spelt(" Go, LEFT! now's") == "go left now's"
+
+
+PHRASES = ["five", "nine", "go left", "bring me the red cup", "bring me the red cop"]
+HEARD = [*PHRASES, " Bye!", " for", " Don't stop.", " go lefts", " Bring me the red book."]
+
+
+@given(
+    free=st.sampled_from(HEARD),
+    free_score=st.floats(-20.0, 0.0),
+    threshold=st.sampled_from([-5.0, -2.0, -0.5, 1.0]),
+    # each phrase's score from the free score and threshold: the decisions change within a few nats
+    offsets=st.fixed_dictionaries(
+        {
+            phrase: st.sampled_from([-8.0, -6.0, -4.5, -3.0, -2.5, -1.5, -0.25, 0.0, 0.5, 1.5, 3.0])
+            for phrase in PHRASES
+        }
+    ),
+    evidence=st.fixed_dictionaries({phrase: st.floats(-5.0, 15.0) for phrase in PHRASES}),
+    raised=st.sampled_from([0.0, 0.5, 0.999]),
+)
+# five heard as " Bye!" 3 nats above nine: nine's bound must stay UNAMBIGUOUS_GAP below five
+@example(" Bye!", -10.0, -5.0, {"five": 0.5, "nine": -2.5, **dict.fromkeys(PHRASES[2:], -8.0)}, {}, 0.999)
+@settings(max_examples=400)
+def test_a_score_below_the_least_deciding_one_may_be_any_bound_of_it_and_the_choice_is_the_same(
+    free: str,
+    free_score: float,
+    threshold: float,
+    offsets: Dict[str, float],
+    evidence: Dict[str, float],
+    raised: float,
+) -> None:
+    """What lets Whisper score only the phrases that can decide (forced.score_phrases_that_decide):
+    a phrase below ``least_deciding_score`` and below the best phrase may be given any upper bound
+    of its score under both, and the phrases taken, the candidates for the evidence and the phrase
+    named when none is taken are the same."""
+    scores = {phrase: free_score + threshold + offset for phrase, offset in offsets.items()}
+    best = max(scores, key=scores.__getitem__)
+    cap = min(least_deciding_score(free_score, threshold), scores[best])
+    bounded = {
+        phrase: score + raised * (cap - score) if phrase != best and score < cap else score
+        for phrase, score in scores.items()
+    }
+    exact, bound = GrammarChoice(free, free_score, scores), GrammarChoice(free, free_score, bounded)
+    candidates = exact.evidence_candidates(threshold)
+    assert bound.evidence_candidates(threshold) == candidates
+    given_evidence = {phrase: evidence.get(phrase, 9.0) for phrase in candidates}
+    assert GrammarChoice(free, free_score, bounded, given_evidence).transcript(threshold) == GrammarChoice(
+        free, free_score, scores, given_evidence
+    ).transcript(threshold)
 
 
 def test_numbers_whisper_writes_in_digits_are_compared_in_words() -> None:

@@ -145,7 +145,9 @@ class GrammarChoice:
 
     free_text: str
     free_score: float  # log-probability of the free decoding
-    phrase_scores: Dict[str, float]  # log-probability of each phrase (its best form)
+    # log-probability of each phrase (its best form); an engine may give, for a phrase below
+    # ``least_deciding_score`` and below the best phrase, an upper bound of it instead
+    phrase_scores: Dict[str, float]
     # For the phrases ``evidence_candidates`` names, when the engine can score a phrase with nothing
     # said (Whisper): log P(phrase | audio) - log P(phrase | silence), its best form's.
     evidence: Mapping[str, float] = field(default_factory=dict)
@@ -204,6 +206,16 @@ class GrammarChoice:
         if preferred:
             return Transcript(max(preferred, key=self.phrase_scores.__getitem__), confidence)
         return Transcript("", rejected=max(self.phrase_scores, key=self.phrase_scores.__getitem__))
+
+
+def least_deciding_score(free_score: float, threshold: float) -> float:
+    """The least phrase score that can change ``GrammarChoice.transcript``: a phrase below it is
+    below ``threshold`` (neither misheard nor a candidate for the evidence) and more than
+    UNAMBIGUOUS_GAP below any phrase that may be the one word's, so an upper bound of its score
+    below it decides as the score itself. The best phrase, named when none is taken, needs its
+    exact score too: scoring every phrase the model writes for a command costs 0.7 to 1 s
+    (Whisper tiny.en, the robot's 32 commands), scoring those that can decide a few decoder calls."""
+    return free_score + threshold - UNAMBIGUOUS_GAP
 
 
 def heard_as(heard: str, phrase: str) -> bool:

@@ -6,13 +6,14 @@ each piece; the pieces' texts are joined. Confidence: 1 - no_speech_prob of the 
 the robot's node reports it. A language with no token in the model directory's config.json (Whisper
 has none for Kinyarwanda) is refused when the engine is built.
 
-With a grammar in force: the free greedy decoding, then each phrase scored by teacher forcing
-(forced.py) in the forms Whisper writes it (written_forms.py: its usual ones, and for a phrase the
-free text may be a mishearing of, the phrase in the free text's punctuation), each form in the
-tokens Whisper's tokenizer gives it (tokenizer.py); the free text when it is a phrase, else the
-phrases evidence_candidates names, scored against silence too (forced.UnheardScores: the audio's
-evidence for them); the answer chosen as onnx/grammar_choice.py says. A command fits in Whisper's
-30 s window: only the first piece is decoded then.
+With a grammar in force: the free greedy decoding, then each phrase that can decide scored by
+teacher forcing (forced.py; the others bounded by their first token) in the forms Whisper writes
+it (written_forms.py: its usual ones, and for a phrase the free text may be a mishearing of, the
+phrase in the free text's punctuation), each form in the tokens Whisper's tokenizer gives it
+(tokenizer.py); the free text when it is a phrase, else the phrases evidence_candidates names,
+scored against silence too (forced.UnheardScores: the audio's evidence for them); the answer
+chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
+piece is decoded then.
 """
 
 import dataclasses
@@ -31,11 +32,12 @@ from speech_event.recognizers.onnx.grammar_choice import (
     NEURAL_GRAMMAR_THRESHOLD,
     GrammarChoice,
     heard_as,
+    least_deciding_score,
     spelt,
 )
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
-from speech_event.recognizers.whisper.forced import UnheardScores, score_phrases
+from speech_event.recognizers.whisper.forced import UnheardScores, score_phrases_that_decide
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
@@ -170,7 +172,16 @@ class WhisperRecognizer:
         ]
         owners += self._as_written(forms, free_text)
         sequences = [tokens for _, tokens in owners]
-        scores = score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)
+        said = spelt(free_text)  # its phrase's evidence needs its exact score
+        scores = score_phrases_that_decide(
+            decoding,
+            self._prompt,
+            sequences,
+            self._manifest,
+            prompted,
+            least_deciding_score(free.score, self._threshold),
+            [index for index, (phrase, _) in enumerate(owners) if phrase == said],
+        )
         best: Dict[str, Tuple[float, List[int]]] = {}
         for (phrase, tokens), score in zip(owners, scores):
             if phrase not in best or score > best[phrase][0]:
