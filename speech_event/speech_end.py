@@ -43,6 +43,8 @@ class SpeechEnds:
         self._pad = round(min(PAD_SECONDS, hangover) * sample_rate)
         self._energies: List[float] = []
         self._rest = np.zeros(0, dtype=np.float64)
+        # _speech() of the frames so far, until more come: the node asks up to four times a block
+        self._speech_frames: Optional[np.ndarray] = None
         self.samples = 0  # taken so far
         # The loudest frame of this speaker: kept across a cut at the end of speech, so that the
         # room sound after it is not measured against itself.
@@ -56,6 +58,7 @@ class SpeechEnds:
             energies = np.mean(np.square(audio[:whole]).reshape(-1, self._frame), axis=1)
             self._energies.extend(energies.tolist())
             self.level = max(self.level, float(energies.max()))
+            self._speech_frames = None
         self._rest = audio[whole:]
         self.samples += int(np.asarray(samples).size)
 
@@ -63,9 +66,16 @@ class SpeechEnds:
         """A new utterance begins with ``audio``; ``keep_level``: the same speaker goes on."""
         level = self.level if keep_level else 0.0
         self._energies, self._rest, self.samples, self.level = [], self._rest[:0], 0, level
+        self._speech_frames = None
         self.add(audio)
 
     def _speech(self) -> np.ndarray:
+        if self._speech_frames is None:
+            self._speech_frames = self._speech_now()
+        return self._speech_frames
+
+    def _speech_now(self) -> np.ndarray:
+        """Whether each frame so far is speech."""
         energies = np.array(self._energies)
         window = np.ones(AVERAGED_FRAMES)
         averaged = np.convolve(energies, window, "same") / np.convolve(np.ones(energies.size), window, "same")
