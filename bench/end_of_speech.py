@@ -19,10 +19,10 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
     With --roscore (a Python that sees rospy), the same on a roscore of the bench's own, the node
     its own process (bench/ros_graph.py); a rejection publishes its error there, timed alike.
 (b) Splits, on the fake clock (the engine runs for real; the decisions depend on the audio
-    alone): people reading with pauses inside (pocketsphinx-testdata's five cards recordings and
-    five librivox sentences) and festival sentences with commas, each with 0.3 s of room noise
-    (-50 dBFS) before and 1 s after, in free speech: how many recordings give more than one text
-    with end_of_speech on, against off.
+    alone): people reading with pauses inside (pocketsphinx-testdata's five cards recordings,
+    five librivox sentences and the three utterances of pocketsphinx's own tests) and festival
+    sentences with commas, each with 0.3 s of room noise (-50 dBFS) before and 1 s after, in free
+    speech: how many recordings give more than one text with end_of_speech on, against off.
 
 (c) With --detector, the detector alone (speech_end.py) on the 32 commands in each mode: how many
     cuts fall more than 20 ms before the end of the last word, how many ends are never heard
@@ -49,7 +49,7 @@ import numpy as np
 from bench.grammar import COMMANDS, DIGITS, ENGINES, FSDD, SPEAKERS, lines
 from fixtures.festival import speak_festival
 from fixtures.noises import at_level, read_audio, rms
-from fixtures.recordings import SAMPLE_RATE, cards, librivox
+from fixtures.recordings import RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, raw_utterance
 from harness.catalog import ScenarioEngines, engine_for
 from harness.processes import wait_until
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
@@ -302,6 +302,7 @@ def measure_splits(engine: Recognizer, setting: float) -> None:
         (recording.name, resample(recording.samples(), SAMPLE_RATE, RATE))
         for recording in cards() + librivox()
     ]
+    speech += [(name, resample(raw_utterance(name), SAMPLE_RATE, RATE)) for name in RAW_UTTERANCES]
     speech += [(sentence, speak_festival(sentence, "slt", RATE)) for sentence in COMMA_SENTENCES]
     split = {"off": 0, "on": 0}
     for name, voice in speech:

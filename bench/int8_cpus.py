@@ -1,5 +1,5 @@
 """int8 on the CPUs robots have: python -m bench.int8_cpus [--models tiny.en base] [--no-avx2]
-[--export-scheme-only] [--cards-only] [--qemu].
+[--all-schemes | --export-scheme-only] [--cards-only] [--qemu].
 
 onnxruntime picks its int8 matrix kernels by CPU: AVX2's kernel for unsigned activations by signed
 weights adds pairs of products in 16 bits and can saturate; AVX-512 VNNI's does not. This writes
@@ -34,6 +34,10 @@ MODELS: Dict[str, TrainedWhisper] = {"tiny.en": TINY_EN, "base": BASE}
 SCHEMES: Dict[str, Int8Scheme] = {
     "7-bit, per channel (export --int8)": Int8Scheme(),
     "8-bit, per tensor (until 2026-11-28)": SIGNED_PER_TENSOR,
+    "8-bit, per channel": Int8Scheme(seven_bits=False),
+    "7-bit, per tensor": Int8Scheme(per_channel=False),
+    "unsigned, per tensor": Int8Scheme(unsigned=True, per_channel=False, seven_bits=False),
+    "unsigned, per channel": Int8Scheme(unsigned=True, seven_bits=False),
 }
 FP32_FILES = (
     "config.json",
@@ -119,6 +123,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models", nargs="+", choices=list(MODELS), default=["tiny.en"])
     parser.add_argument("--no-avx2", dest="avx2", action="store_false", help="only this CPU")
+    parser.add_argument("--all-schemes", action="store_true", help="the six of docs/models.md, not two")
     parser.add_argument("--export-scheme-only", action="store_true", help="only what export --int8 writes")
     parser.add_argument(
         "--cards-only", action="store_true", help="the five cards recordings (a third of the time)"
@@ -129,7 +134,9 @@ def main() -> None:
     if arguments.transcribe:
         print(json.dumps(transcribe(arguments.transcribe, True, arguments.cards_only)))
         return
-    schemes = dict(list(SCHEMES.items())[:1]) if arguments.export_scheme_only else SCHEMES
+    schemes = dict(
+        list(SCHEMES.items())[: 1 if arguments.export_scheme_only else 6 if arguments.all_schemes else 2]
+    )
     with tempfile.TemporaryDirectory(prefix="int8_cpus_") as work:
         for name in arguments.models:
             measure(name, arguments.avx2, Path(work), schemes, arguments.cards_only, arguments.qemu)
