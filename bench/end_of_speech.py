@@ -8,7 +8,8 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
     the voice's own: its last sample above -40 dBFS (the rendered voice; its noise is -55 dBFS),
     not the node's detector. With --people, people saying digits too (FSDD's george, jackson
     and lucas, one take of each digit, 8 kHz), in a grammar of the digits and in free speech:
-    each recording is trimmed close to its word, so the word ends where the recording does.
+    each recording is trimmed close to its word, so the word ends where the recording does (the
+    gate and the driver at 20 dB only: 30 words a set).
     soundDetection modelled both ways: the robot's gate (blocks while the speech lasts, the last
     one holding the end, filled out with a quiet room), and the driver (pink room noise under the
     speech at 20 and 10 dB SNR, or babble at 10 dB, and 1 s of it after, passed as blocks). Each
@@ -108,6 +109,16 @@ class Speech:
     text: str
 
 
+@dataclasses.dataclass(frozen=True)
+class SpeechSet:
+    """Utterances said in one grammar ("" free speech, a file, or phrases parted by |), in ``modes``."""
+
+    name: str
+    grammar: str
+    speech: List[Speech]
+    modes: Sequence[Mode] = MODES
+
+
 def festival_speech(phrase: str) -> Speech:
     """slt saying ``phrase``; the last word ends at the voice's last sample above -40 dBFS."""
     voice = speak_festival(phrase, "slt", RATE)
@@ -189,14 +200,13 @@ def _figures(values: List[float]) -> str:
     return f"median {statistics.median(ordered):.2f} s, 90th {p90:.2f} s{none}"
 
 
-def measure_latency(
-    engine: Recognizer, sets: Sequence[Tuple[str, str, List[Speech]]], setting: float
-) -> None:
-    """Each set (its name, its grammar: "" for free speech, its utterances) in each mode, off and on."""
+def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: float) -> None:
+    """Each set in each of its modes, off and on."""
     base = SpeechEventConfig(health_check_period=3600.0)
     settings = {"off": base, f"end_of_speech {setting}": dataclasses.replace(base, end_of_speech=setting)}
-    for set_name, grammar, speech in sets:
-        for mode in MODES:
+    for speech_set in sets:
+        set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
+        for mode in speech_set.modes:
             times: Dict[str, List[float]] = {name: [] for name in settings}
             wrong: Dict[str, int] = {name: 0 for name in settings}
             for index, utterance in enumerate(speech):
@@ -227,9 +237,7 @@ def _grammar_file(grammar: str, folder: Path) -> str:
     return str(phrases)
 
 
-def roscore_latency(
-    recognizer: str, quantization: str, sets: Sequence[Tuple[str, str, List[Speech]]], setting: float
-) -> None:
+def roscore_latency(recognizer: str, quantization: str, sets: Sequence[SpeechSet], setting: float) -> None:
     """(a) on a roscore of the bench's own (bench/ros_graph.py): the node its own process, built
     from its configuration as on the robot, off and on in turn; the blocks published at their
     pace, the text timed at this process's subscriber. Every utterance answers
@@ -246,7 +254,8 @@ def roscore_latency(
 
     with ros_graph("speech_event_bench_end_of_speech_") as graph:
         graph.transport.subscribe(TEXT_TOPIC, String, on_text)
-        for set_name, grammar, speech in sets:
+        for speech_set in sets:
+            set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
             for label, seconds in (("off", 0.0), (f"end_of_speech {setting}", setting)):
                 base = SpeechEventConfig(
                     health_check_period=3600.0,
@@ -257,7 +266,7 @@ def roscore_latency(
                 )
                 name, config = engine_for(recognizer, base)
                 node = graph.start_node(format_config(config), name, graph.subscribed(TEXT_TOPIC))
-                for mode in MODES:
+                for mode in speech_set.modes:
                     times, wrong = [], 0
                     for index, utterance in enumerate(speech):
                         audio, end = said(utterance, mode, index)
@@ -374,12 +383,16 @@ def main() -> None:
     recognizer, quantization = ENGINES[arguments.engine]
     config = SpeechEventConfig(quantization=quantization or "none")
     commands = [festival_speech(phrase) for phrase in lines(COMMANDS)[: arguments.phrases]]
-    sets = [("grammar", str(COMMANDS), commands), ("free speech", "", commands)] if commands else []
-    if arguments.people:
-        digits = people_speech()
+    sets = (
+        [SpeechSet("grammar", str(COMMANDS), commands), SpeechSet("free speech", "", commands)]
+        if commands
+        else []
+    )
+    if arguments.people:  # 30 words a set: the gate and the quieter room
+        digits, modes = people_speech(), MODES[:2]
         sets += [
-            ("people's digits, digits grammar", "|".join(DIGITS), digits),
-            ("people's digits, free", "", digits),
+            SpeechSet("people's digits, digits grammar", "|".join(DIGITS), digits, modes),
+            SpeechSet("people's digits, free speech", "", digits, modes),
         ]
     if arguments.roscore:
         print(f"(a) {arguments.engine} on a roscore: end of the last word to the text")
