@@ -286,14 +286,30 @@ def test_a_phrase_about_as_likely_as_the_free_text_is_taken_on_the_audios_eviden
     yet 0.2 nats more likely than that, the audio raising it 16.5 nats over the phrase unheard;
     "thank you", the command the model most expects with nothing said, 6.2 nats above espeak's
     " Fadl Macar." with -3.1."""
-    scores = {"wave your hand": -5.4, "thank you": -7.6, "dance": -4.9, "stop": -20.0}
-    heard = GrammarChoice(" Wait, go ahead.", -5.6, scores, {"wave your hand": 16.5, "dance": 7.9})
+    heard = GrammarChoice(
+        " Wait, go ahead.",
+        -5.6,
+        {"wave your hand": -5.4, "thank you": -7.6, "dance": -5.8, "stop": -20.0},
+        {"wave your hand": 16.5, "dance": 7.9},
+    )
     assert heard.evidence_candidates(-5.0) == ["wave your hand", "dance"]
     assert heard.transcript(-5.0, 0.9) == Transcript("wave your hand", 0.9)
+    scores = {"wave your hand": -5.4, "thank you": -7.6, "dance": -4.9, "stop": -20.0}
     # the most likely of several with the evidence
     assert GrammarChoice(" Wait.", -5.6, scores, {"wave your hand": 16.5, "dance": 8.0}).transcript(
         -5.0
     ) == Transcript("dance")
+    # only the most likely: never one the model finds less likely, whatever its evidence (base int8
+    # as an AVX2 CPU, babble 10 dB under a spoken "stop" written " Stun.": "stop" +1.7 nats with
+    # +7.9, "stand up" -0.2 with +8.9)
+    assert GrammarChoice(" Wait.", -5.6, scores, {"wave your hand": 16.5, "dance": 7.9}).transcript(
+        -5.0
+    ) == Transcript("", rejected="dance")
+    stun = GrammarChoice(
+        " Stun.", -5.0, {"stop": -3.3, "stand up": -5.2, "thank you": -8.2}, {"stop": 7.9, "stand up": 8.9}
+    )
+    assert stun.evidence_candidates(-5.0) == ["stop", "stand up"]
+    assert stun.transcript(-5.0) == Transcript("", rejected="stop")
     # evidence below EVIDENCE_THRESHOLD, or none given (the NeMo engines): rejected
     assert GrammarChoice(" Wait.", -5.6, scores, {"dance": 7.9}).transcript(-5.0) == Transcript(
         "", rejected="dance"
