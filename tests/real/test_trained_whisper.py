@@ -159,3 +159,22 @@ def in_the_room(speech: np.ndarray, seed_name: str) -> np.ndarray:
     rng = np.random.default_rng(zlib.crc32(seed_name.encode()))
     room = [at_level("pink", 3200, -50.0, 16000, rng) for _ in range(2)]
     return np.concatenate([room[0], speech, room[1]])
+
+
+def test_people_saying_a_command_in_pocketsphinx_own_recordings_are_published_within_a_grammar(
+    tiny_en: Path,
+) -> None:
+    """pocketsphinx-testdata's own test utterances, people at 16 kHz: "go forward ten meters" is
+    published in a grammar that holds it, and rejected in the robot's commands (none is it); the
+    two others, no command, are rejected in both."""
+    commands = load_grammar(ROOT / "harness" / "data" / "robot_commands.txt")
+    moves = phrases_grammar(["go forward ten meters", "go back ten meters", "stop"], "moves")
+    engine = WhisperRecognizer(tiny_en, "english")
+    heard = {}
+    for name in recordings.RAW_UTTERANCES:
+        texts = []
+        for grammar in (moves, commands):
+            engine.use_grammar(grammar)
+            texts.append(engine.transcribe(recordings.raw_utterance(name)).text)
+        heard[name] = texts
+    assert heard == {"goforward": ["go forward ten meters", ""], "numbers": ["", ""], "something": ["", ""]}
