@@ -39,9 +39,11 @@ nearest cases; and the decoding time per second of audio. Printed; nothing is as
 ``--record FILE`` writes each decision (for the neural engines the free decoding, every phrase's
 score and, for Whisper, the evidence of the free text's phrase, or of the phrases
 evidence_candidates names when the words took none: a replay with a wider slack than the record's
-lacks the rest); ``--replay FILE``
-judges those again with today's rule, decoding nothing: how a change of the rule
-(onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
+lacks the rest); ``--replay FILE`` judges those again with today's rule, decoding nothing: how a
+change of the rule (onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
+Whisper's scores below least_deciding_score are upper bounds (forced.score_phrases_that_decide
+left those forms unscored): a rule that reaches below it needs the forms scored, which
+least_deciding_score's own change does.
 """
 
 import argparse
