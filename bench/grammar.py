@@ -42,8 +42,8 @@ evidence_candidates names when the words took none: a replay with a wider slack 
 lacks the rest); ``--replay FILE`` judges those again with today's rule, decoding nothing: how a
 change of the rule (onnx/grammar_choice.py) is measured on the same figures in seconds, not hours.
 Whisper's scores below least_deciding_score are upper bounds (forced.score_phrases_that_decide
-left those forms unscored): a rule that reaches below it needs the forms scored, which
-least_deciding_score's own change does.
+left those forms unscored): a rule that reaches below it lowers least_deciding_score too, and is
+measured on a new record.
 """
 
 import argparse
