@@ -36,6 +36,7 @@ from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.model import DECODER_FILE, DecoderSession, WhisperModel
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
+from tests.helpers.recorded_decoding import RecordedDecoding
 
 RATE = 16000
 PROMPT = MANIFEST.prompt("english")
@@ -194,20 +195,6 @@ def test_a_token_whispers_rules_rule_out_scores_minus_infinity(tones_model: Whis
     assert scores == [-np.inf, -np.inf, -np.inf]  # suppressed anywhere; eot at the first position
 
 
-class _CountedCalls:
-    """A decoding session that notes the tokens of each decoder call made on it and on its forks."""
-
-    def __init__(self, session: DecoderSession, calls: List[Tuple[int, ...]]) -> None:
-        self._session, self._calls = session, calls
-
-    def __call__(self, tokens: Sequence[int]) -> np.ndarray:
-        self._calls.append(tuple(tokens))
-        return self._session(tokens)
-
-    def fork(self) -> "_CountedCalls":
-        return _CountedCalls(self._session.fork(), self._calls)
-
-
 @pytest.mark.parametrize(
     "least, bounded",
     [
@@ -231,15 +218,15 @@ def test_only_the_sequences_that_can_decide_are_scored_the_others_bounded_by_the
         " left",
     ]
     sequences = [_tokens(text) for text in texts]
-    calls: List[Tuple[int, ...]] = []
-    session = _CountedCalls(DecoderSession(tones_model, _cross(tones_model, "go left")), calls)
+    calls: List[List[int]] = []
+    session = RecordedDecoding(DecoderSession(tones_model, _cross(tones_model, "go left")), calls)
     prompted = session(PROMPT)
     exact = score_phrases(session.fork(), PROMPT, sequences, MANIFEST, prompted)
     calls.clear()
     always = [texts.index(" a")]  # scored whatever its score: the free text's phrase, for its evidence
     scores = score_phrases_that_decide(session, PROMPT, sequences, MANIFEST, prompted, least, always)
     # one decoder call for each sequence scored, exactly as score_phrases scores it
-    scored = [texts[sequences.index(list(tokens))] for tokens in calls]
+    scored = [texts[sequences.index(tokens)] for tokens in calls]
     assert sorted(scored) == sorted(set(texts) - set(bounded))
     assert [score for score, text in zip(scores, texts) if text in scored] == [
         score for score, text in zip(exact, texts) if text in scored

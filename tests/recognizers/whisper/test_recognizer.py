@@ -22,10 +22,11 @@ from speech_event.recognizers.onnx.mel import mel_filterbank
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of, token_lines
-from speech_event.recognizers.whisper.model import Decoding, WhisperModel
+from speech_event.recognizers.whisper.model import WhisperModel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer, pieces_at_quiet_points
 from tests.helpers.application import run_application
 from tests.helpers.cancelling import failures_of_a_cancelled_transcription
+from tests.helpers.recorded_decoding import RecordedDecoding
 
 RATE = 16000
 # A small vocabulary: 0-4 text, 5 eot, 6 sot, 7 en, 8 transcribe, 9 no_speech, 10 no timestamps,
@@ -181,20 +182,6 @@ def test_noise_alone_is_no_text_and_low_confidence(engine: WhisperRecognizer) ->
     assert transcript.confidence is not None and transcript.confidence < 0.5
 
 
-class _Recorded:
-    """A decoding that records the tokens of each of its passes and of its forks' passes."""
-
-    def __init__(self, decoding: Decoding, passes: List[List[int]]) -> None:
-        self._decoding, self.passes = decoding, passes
-
-    def __call__(self, tokens: Sequence[int]) -> np.ndarray:
-        self.passes.append(list(tokens))
-        return self._decoding(tokens)
-
-    def fork(self) -> "_Recorded":
-        return _Recorded(self._decoding.fork(), self.passes)
-
-
 def test_within_a_grammar_the_prompt_runs_once_for_the_free_text_and_every_phrase(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -203,7 +190,9 @@ def test_within_a_grammar_the_prompt_runs_once_for_the_free_text_and_every_phras
     passes: List[List[int]] = []
     decoding = WhisperModel.decoding
     monkeypatch.setattr(
-        WhisperModel, "decoding", lambda model, mel, run=None: _Recorded(decoding(model, mel, run), passes)
+        WhisperModel,
+        "decoding",
+        lambda model, mel, run=None: RecordedDecoding(decoding(model, mel, run), passes),
     )
     assert engine.transcribe(_speech("stop")).text == "stop"
     # the prompt first, then the free text token by token and each phrase's forms, all from its
