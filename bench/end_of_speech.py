@@ -72,6 +72,7 @@ BLOCK = 4096
 WORD_END_LEVEL = 0.01  # -40 dBFS
 AFTER_SPEECH = 1.0  # the driver's utterance_time_buffer
 SETTING = 0.3
+GAP = 0.1  # speculation_gap with it: longer than the 85 ms between the blocks of one utterance
 COMMA_SENTENCES = (
     "yes, please go to the kitchen",
     "well, I think so, but not today",
@@ -200,10 +201,21 @@ def _figures(values: List[float]) -> str:
     return f"median {statistics.median(ordered):.2f} s, 90th {p90:.2f} s{none}"
 
 
-def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: float) -> None:
+def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, SpeechEventConfig]:
+    """The settings compared: off (today), end_of_speech ``setting`` speculating at the default
+    speculation_gap, and speculating at ``gap`` (0: not measured)."""
+    on = dataclasses.replace(base, end_of_speech=setting)
+    named = {"off": base, f"end_of_speech {setting}": on}
+    if gap:
+        named[f"end_of_speech {setting}, speculation_gap {gap}"] = dataclasses.replace(
+            on, speculation_gap=gap
+        )
+    return named
+
+
+def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: float, gap: float) -> None:
     """Each set in each of its modes, off and on."""
-    base = SpeechEventConfig(health_check_period=3600.0)
-    settings = {"off": base, f"end_of_speech {setting}": dataclasses.replace(base, end_of_speech=setting)}
+    settings = compared(SpeechEventConfig(health_check_period=3600.0), setting, gap)
     for speech_set in sets:
         set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
         for mode in speech_set.modes:
@@ -237,7 +249,9 @@ def _grammar_file(grammar: str, folder: Path) -> str:
     return str(phrases)
 
 
-def roscore_latency(recognizer: str, quantization: str, sets: Sequence[SpeechSet], setting: float) -> None:
+def roscore_latency(
+    recognizer: str, quantization: str, sets: Sequence[SpeechSet], setting: float, gap: float
+) -> None:
     """(a) on a roscore of the bench's own (bench/ros_graph.py): the node its own process, built
     from its configuration as on the robot, off and on in turn; the blocks published at their
     pace, the text timed at this process's subscriber. Every utterance answers
@@ -256,15 +270,14 @@ def roscore_latency(recognizer: str, quantization: str, sets: Sequence[SpeechSet
         graph.transport.subscribe(TEXT_TOPIC, String, on_text)
         for speech_set in sets:
             set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
-            for label, seconds in (("off", 0.0), (f"end_of_speech {setting}", setting)):
-                base = SpeechEventConfig(
-                    health_check_period=3600.0,
-                    publish_unrecognized=True,
-                    end_of_speech=seconds,
-                    quantization=quantization or "none",
-                    grammar=_grammar_file(grammar, graph.work),
-                )
-                name, config = engine_for(recognizer, base)
+            base = SpeechEventConfig(
+                health_check_period=3600.0,
+                publish_unrecognized=True,
+                quantization=quantization or "none",
+                grammar=_grammar_file(grammar, graph.work),
+            )
+            for label, setting_config in compared(base, setting, gap).items():
+                name, config = engine_for(recognizer, setting_config)
                 node = graph.start_node(format_config(config), name, graph.subscribed(TEXT_TOPIC))
                 for mode in speech_set.modes:
                     times, wrong = [], 0
@@ -372,6 +385,9 @@ def main() -> None:
     parser.add_argument("--people", action="store_true", help="(a) on people's digits too")
     parser.add_argument("--roscore", action="store_true", help="(a) only, the node a process on a roscore")
     parser.add_argument("--setting", type=float, default=SETTING, help="end_of_speech, seconds")
+    parser.add_argument(
+        "--speculation-gap", type=float, default=GAP, help="(a) on with this speculation_gap too; 0: not"
+    )
     parser.add_argument("--no-splits", dest="splits", action="store_false")
     parser.add_argument("--detector", action="store_true", help="(c) only")
     parser.add_argument("--texts", action="store_true", help="(d) only")
@@ -396,7 +412,7 @@ def main() -> None:
         ]
     if arguments.roscore:
         print(f"(a) {arguments.engine} on a roscore: end of the last word to the text")
-        roscore_latency(recognizer, quantization, sets, arguments.setting)
+        roscore_latency(recognizer, quantization, sets, arguments.setting, arguments.speculation_gap)
         return
     with ScenarioEngines(recognizer, config) as engines:
         engine = engines.build()
@@ -407,7 +423,7 @@ def main() -> None:
             return
         if sets:
             print(f"(a) {arguments.engine}: end of the last word to the text")
-            measure_latency(engine, sets, arguments.setting)
+            measure_latency(engine, sets, arguments.setting, arguments.speculation_gap)
         if arguments.splits:
             print(f"(b) {arguments.engine}: recordings with pauses inside, free speech")
             measure_splits(engine, arguments.setting)

@@ -7,8 +7,9 @@ gate sends blocks only while it hears speech), cut after the last block. Whether
 transcribes the utterance up to the cut, and the turn ends there when its text is complete (a
 phrase of the grammar in force; in free speech a sentence the engine closes or one of
 ``complete_answers``: speculation.py). The speculation starts as soon as the audio up to the cut
-is there, before the end is heard, so its text is often ready when the decision comes; more
-blocks cancel it only when they move the cut (speech goes on). What follows the cut is room
+is there, before the end is heard (with the gate, at ``speculation_gap`` after the last block, on
+the whole utterance), so its text is often ready when the decision comes; more blocks cancel it
+only when they move the cut (speech goes on). What follows the cut is room
 sound: it is dropped, and the next block starts the next utterance.
 
 While a decision is pending, the blocks that arrive are held, in order with their arrival times,
@@ -62,19 +63,23 @@ class EndOfTurn:
         """A cut to decide, heard in the samples: end_of_speech of non-speech follows the speech."""
         return self._new(self._ends.heard_end() if self.on else None)
 
-    def speculation_cut(self) -> Optional[int]:
-        """Where a speculation may transcribe up to before the end is heard (its pad taken), so its
-        text is there when the decision comes; None while speech goes on."""
+    def speculation_cut(self, paused: bool = False) -> Optional[int]:
+        """Where a speculation may transcribe up to before the end is heard, so its text is there
+        when the decision comes: the speech's end once its pad is taken, or once no block came
+        for speculation_gap (``paused``), where a decision on that pause would cut (gap_end);
+        None while speech goes on."""
         if self.on and self.deciding is None:
-            cut = self._ends.padded_end()
+            cut = self._after_last_block() if paused else self._ends.padded_end()
             return cut if cut is not None and cut > self._decided else None
         return self.deciding
 
     def gap_end(self) -> Optional[int]:
         """A cut to decide when no block came for end_of_speech: after the last block, if speech
         was heard."""
-        heard = self.on and self._ends.heard_speech()
-        return self._new(self._ends.samples if heard else None)
+        return self._new(self._after_last_block() if self.on else None)
+
+    def _after_last_block(self) -> Optional[int]:
+        return self._ends.samples if self._ends.heard_speech() else None
 
     def _new(self, cut: Optional[int]) -> Optional[int]:
         if cut is None or self.deciding is not None or cut <= self._decided:

@@ -117,7 +117,13 @@ class SpeechEventNode:
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
         self._end = EndOfTurn(config)
         self._turn = TurnTaking(
-            config, clock, self._lock, self._close_utterance, self._gap_passed, self._speculated
+            config,
+            clock,
+            self._lock,
+            self._close_utterance,
+            self._gap_passed,
+            self._silence_passed,
+            self._speculated,
         )
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         recognition = Recognition(config.sample_rate, screen, stopwatch)
@@ -263,7 +269,11 @@ class SpeechEventNode:
             self._background.speculate()  # the speech may have ended: its text is ready sooner
 
     def _gap_passed(self) -> None:
-        """Under the lock: no block came for the gap; with end_of_speech that is the end of speech."""
+        """Under the lock: no block came for speculation_gap."""
+        self._background.speculate()
+
+    def _silence_passed(self) -> None:
+        """Under the lock: no block came for end_of_speech: the end of speech (the robot's gate)."""
         self._decide(self._end.gap_end())
         self._background.speculate()
 
@@ -334,7 +344,7 @@ class SpeechEventNode:
             self._recognizer,
             self._grammar,
             origin,
-            self._end.speculation_cut(),
+            self._end.speculation_cut(paused=self._turn.gap_passed()),
         )
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:

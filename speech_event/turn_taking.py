@@ -3,13 +3,16 @@ speculate on it.
 
 An utterance ends ``speech_pause_period`` after its latest block, or ``early_pause`` after it once
 a speculation found a complete answer (early end of turn). Speculation may start
-``speculation_gap`` after the latest block. Each is one timer per utterance, not one per block:
+``speculation_gap`` after the latest block; with ``end_of_speech``, no block for that long is the end
+of speech (the robot's gate), where the node decides whether the turn ends. Each is one timer per
+utterance, not one per block:
 set at the first block, and when it fires early (more blocks came since) set again for the time
 after the latest block; a block that arrives once the pause is over, before its timer fired, ends
 the utterance first. Every method is called under the node's lock; the timers take it.
 """
 
 import functools
+import math
 import threading
 from dataclasses import dataclass, field
 from typing import Callable, Optional
@@ -82,38 +85,47 @@ class TurnTaking:
         lock: threading.Lock,
         on_pause_end: Callable[[], None],
         on_gap: Callable[[], None],
+        on_silence: Callable[[], None],
         on_speculated: Callable[[int, bool], None],
     ) -> None:
-        """``on_pause_end`` closes the utterance; ``on_gap`` may speculate or decide on the end of
-        speech; ``on_speculated`` hears of each speculation on the utterance being collected (its
-        samples, whether its text is complete). All three are called under ``lock``."""
+        """``on_pause_end`` closes the utterance; ``on_gap`` may speculate; ``on_silence`` (with
+        end_of_speech) decides on the end of speech; ``on_speculated`` hears of each speculation on
+        the utterance being collected (its samples, whether its text is complete). All four are
+        called under ``lock``."""
         self._config = config
         self._clock = clock
         self._on_speculated = on_speculated
-        # With end_of_speech, no block for that long is heard as the end of speech.
+        # With end_of_speech, no block for that long is heard as the end of speech (the robot's
+        # gate sends blocks only while it hears speech). A speculation on the audio up to there may
+        # start sooner, at speculation_gap, so its text is ready when the end is heard: one timer
+        # for each, the gap's only when it comes first.
         self._ends_at_end_of_speech = ends_at_end_of_speech(config)
-        self._gap_seconds = config.end_of_speech if self._ends_at_end_of_speech else config.speculation_gap
+        self._silence_seconds = config.end_of_speech if self._ends_at_end_of_speech else math.inf
+        self._gap_seconds = min(config.speculation_gap, self._silence_seconds)
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
         self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap)
+        self._silence = RearmingTimer(clock, lock, self._silence_due, on_silence)
 
     def heard(self, when: float) -> None:
         """A block arrived at ``when``: the pause starts again, and the gap."""
         self.last_arrival = when
         self._ends_early = False
         self._pause.arm()
-        if self._config.speculative_recognition:
+        if self._config.speculative_recognition and self._gap_seconds < self._silence_seconds:
             self._gap.arm()
+        if self._ends_at_end_of_speech:
+            self._silence.arm()
 
     def end_pause_if_over(self, arrival: float) -> None:
         """Before a block that arrived at ``arrival`` is taken: if the pause after the latest block
         was over by then, the utterance ends now, although its timer has not fired yet, so the
-        block starts the next utterance; and if the gap was over, it has passed (on_gap). Where
-        utterances end then depends on when blocks arrive, never on how late a timer thread runs."""
+        block starts the next utterance; and if end_of_speech without a block was over, the end of
+        speech is heard (on_silence). Where utterances end then depends on when blocks arrive, never
+        on how late a timer thread runs."""
         self._pause.fire_if_over(arrival)
-        if self._ends_at_end_of_speech:
-            self._gap.fire_if_over(arrival)
+        self._silence.fire_if_over(arrival)
 
     def speculated(self, samples: int, complete: bool) -> None:
         """A speculation on the first ``samples`` of the utterance being collected ended, its text
@@ -144,6 +156,7 @@ class TurnTaking:
         """Unset both timers."""
         self._pause.cancel()
         self._gap.cancel()
+        self._silence.cancel()
 
     def _pause_due(self) -> float:
         pause = self._config.early_pause if self._ends_early else self._config.speech_pause_period
@@ -151,6 +164,9 @@ class TurnTaking:
 
     def _gap_due(self) -> float:
         return self.last_arrival + self._gap_seconds
+
+    def _silence_due(self) -> float:
+        return self.last_arrival + self._silence_seconds
 
     def _pause_ended(self, close: Callable[[], None]) -> Callable[[], None]:
         def ended() -> None:

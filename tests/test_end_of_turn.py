@@ -107,6 +107,24 @@ def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_l
     assert _timed(rig) == [(round(last_block + CONFIG.end_of_speech, 6), "stop")]
 
 
+@pytest.mark.parametrize(
+    ("speculation_gap", "job_seconds", "after_the_last_block"),
+    [
+        pytest.param(0.3, 0.15, 0.45, id="speculating_at_the_end_the_text_comes_once_the_engine_is_done"),
+        pytest.param(0.1, 0.15, 0.3, id="speculating_at_speculation_gap_the_text_is_ready_at_the_end"),
+        pytest.param(0.1, 0.25, 0.35, id="or_comes_as_soon_as_the_engine_is_done"),
+    ],
+)
+def test_with_blocks_that_stop_with_the_speech_the_speculation_starts_at_speculation_gap(
+    speculation_gap: float, job_seconds: float, after_the_last_block: float
+) -> None:
+    audio = _speech("stop")
+    rig = _run(dataclasses.replace(CONFIG, speculation_gap=speculation_gap), audio, job_seconds=job_seconds)
+    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    assert _timed(rig) == [(round(last_block + after_the_last_block, 6), "stop")]
+    assert rig.node.speculations.started == 1  # on the whole utterance, the cut of the decision
+
+
 SAID: List[Tuple[object, ...]] = [
     ("stop", 1.0),
     ("go", 0.5, "to the kitchen", 0.4),
@@ -150,13 +168,16 @@ def _spoken_with_gaps(
     st.sampled_from([COMMANDS, ""]),
     st.sampled_from([0.5, 1.5]),
     st.floats(0.0, 2.5),
+    st.sampled_from([0.1, 0.3]),
 )
 def test_with_gaps_between_blocks_however_long_the_engine_takes_the_texts_are_the_same(
-    turns: List[Tuple[str, float]], grammar: str, pause: float, job_seconds: float
+    turns: List[Tuple[str, float]], grammar: str, pause: float, job_seconds: float, speculation_gap: float
 ) -> None:
     config = dataclasses.replace(CONFIG, speech_pause_period=pause)
     at_once = _spoken_with_gaps(config, turns, grammar, 0.0)
-    slow = _spoken_with_gaps(config, turns, grammar, job_seconds)
+    slow = _spoken_with_gaps(
+        dataclasses.replace(config, speculation_gap=speculation_gap), turns, grammar, job_seconds
+    )
     assert slow.texts() == at_once.texts()
 
 

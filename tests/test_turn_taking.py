@@ -219,6 +219,7 @@ def test_fire_if_over_leaves_an_unarmed_timer_alone() -> None:
 CONFIG = SpeechEventConfig(speech_pause_period=1.5, speculation_gap=0.25, early_pause=0.0)
 EARLY = dataclasses.replace(CONFIG, early_pause=0.5)
 NO_SPECULATION = dataclasses.replace(CONFIG, speculative_recognition=False)
+END_OF_SPEECH = dataclasses.replace(CONFIG, speculation_gap=0.125, end_of_speech=0.375)
 
 
 class Turn:
@@ -229,9 +230,12 @@ class Turn:
         self.lock = threading.Lock()
         self.ends: List[float] = []
         self.gaps: List[float] = []
+        self.silences: List[float] = []
         self.gap_passed_at_gap: List[bool] = []
         self.held_lock: List[bool] = []
-        self.turn = TurnTaking(config, self.clock, self.lock, self._ended, self._gap, lambda *_: None)
+        self.turn = TurnTaking(
+            config, self.clock, self.lock, self._ended, self._gap, self._silence, lambda *_: None
+        )
 
     def _ended(self) -> None:
         self.ends.append(self.clock.now())
@@ -241,6 +245,10 @@ class Turn:
         self.gaps.append(self.clock.now())
         self.held_lock.append(self.lock.locked())
         self.gap_passed_at_gap.append(self.turn.gap_passed())
+
+    def _silence(self) -> None:
+        self.silences.append(self.clock.now())
+        self.held_lock.append(self.lock.locked())
 
     def block(self, when: float) -> None:
         """A block arrives at ``when``."""
@@ -293,12 +301,14 @@ def test_the_pause_and_the_gap_call_back_under_the_lock() -> None:
 
 
 class Run(NamedTuple):
-    """What happens on the turn (see Turn.play); the times its pauses ended and its gaps passed by 10 s."""
+    """What happens on the turn (see Turn.play); the times its pauses ended, its gaps passed and (with
+    end_of_speech) its silences passed by 10 s."""
 
     config: SpeechEventConfig
     steps: List[Tuple[float, str]]
     ends: List[float]
     gaps: List[float]
+    silences: Sequence[float] = ()
 
 
 RUNS = {
@@ -327,6 +337,14 @@ RUNS = {
         CONFIG, [(0.0, "block"), (0.0, "drop_turn"), (1.0, "block")], [2.5], [0.25, 1.25]
     ),
     "stop_unsets_both_timers": Run(CONFIG, [(0.0, "block"), (0.0, "stop")], [], []),
+    # the silence timer fired at 0.375 and was set again for 0.125 + 0.375
+    "with_end_of_speech_the_gap_comes_first_and_the_silence_end_of_speech_after_the_last_block": Run(
+        END_OF_SPEECH, [(0.0, "block"), (0.125, "block")], [1.625], [0.125, 0.25], [0.5]
+    ),
+    "a_gap_not_shorter_than_end_of_speech_sets_no_timer_of_its_own": Run(
+        dataclasses.replace(END_OF_SPEECH, speculation_gap=0.375), [(0.0, "block")], [1.5], [], [0.375]
+    ),
+    "stop_unsets_the_silence_timer_too": Run(END_OF_SPEECH, [(0.0, "block"), (0.0, "stop")], [], [], []),
 }
 
 
@@ -337,6 +355,7 @@ def test_the_pauses_that_end_and_the_gaps_that_pass(run: Run) -> None:
     turn.clock.advance_to(10.0)
     assert turn.ends == run.ends
     assert turn.gaps == run.gaps
+    assert turn.silences == list(run.silences)
 
 
 def test_a_complete_answer_found_after_early_pause_ends_the_turn_at_once() -> None:
@@ -403,7 +422,13 @@ def test_a_block_after_the_pause_ends_the_utterance_although_the_timer_is_late(
     clock = ManualClock()  # no timer fires unless the test runs it: the timer thread is late
     turn_ends: List[float] = []
     turn = TurnTaking(
-        config, clock, threading.Lock(), lambda: turn_ends.append(clock.now()), lambda: None, lambda *_: None
+        config,
+        clock,
+        threading.Lock(),
+        lambda: turn_ends.append(clock.now()),
+        lambda: None,
+        lambda: None,
+        lambda *_: None,
     )
     turn.heard(0.0)
     if early:
@@ -411,3 +436,30 @@ def test_a_block_after_the_pause_ends_the_utterance_although_the_timer_is_late(
     clock.time = now
     turn.end_pause_if_over(now)
     assert turn_ends == ends
+
+
+@pytest.mark.parametrize(
+    ("now", "silences"),
+    [
+        pytest.param(0.3125, [], id="before_end_of_speech_without_a_block_nothing_is_heard"),
+        pytest.param(0.375, [0.375], id="once_it_is_over_the_end_of_speech_is_heard_before_the_block"),
+    ],
+)
+def test_a_block_after_end_of_speech_without_one_hears_the_end_although_the_timer_is_late(
+    now: float, silences: List[float]
+) -> None:
+    clock = ManualClock()
+    heard: List[float] = []
+    turn = TurnTaking(
+        END_OF_SPEECH,
+        clock,
+        threading.Lock(),
+        lambda: None,
+        lambda: None,
+        lambda: heard.append(clock.now()),
+        lambda *_: None,
+    )
+    turn.heard(0.0)
+    clock.time = now
+    turn.end_pause_if_over(now)
+    assert heard == silences
