@@ -47,10 +47,10 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from bench.grammar import COMMANDS, DIGITS, ENGINES, FSDD, SPEAKERS, lines
+from bench.grammar import COMMANDS, DIGITS, ENGINES, SPEAKERS, lines
 from fixtures.festival import speak_festival
 from fixtures.noises import at_level, read_audio, rms
-from fixtures.recordings import RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, raw_utterance
+from fixtures.recordings import FSDD, RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, raw_utterance
 from harness.catalog import ScenarioEngines, engine_for
 from harness.processes import wait_until
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
@@ -59,13 +59,13 @@ from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
 from speech_event.config import SpeechEventConfig, format_config
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
-from speech_event.messages import Float32MultiArray, SetGrammarRequest, String
+from speech_event.messages import Float32MultiArray, SetGrammarRequest, String, TranscriptMessage
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Clock, Executor, Recognizer
 from speech_event.recognizers.onnx.grammar_choice import spelt
 from speech_event.speech_end import SpeechEnds
-from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC
+from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 
 RATE = 48000
 BLOCK = 4096
@@ -140,14 +140,49 @@ def people_speech() -> List[Speech]:
 
 def _node(
     config: SpeechEventConfig, engine: Recognizer, clock: Clock, executor: Executor, grammar: str
-) -> Tuple[SpeechEventNode, InMemoryBus, List[Tuple[float, str]]]:
-    bus, heard = InMemoryBus(), []  # type: Tuple[InMemoryBus, List[Tuple[float, str]]]
-    bus.subscribe(TEXT_TOPIC, String, lambda message: heard.append((time.monotonic(), message.data)))  # type: ignore[attr-defined]
+) -> Tuple[SpeechEventNode, InMemoryBus, List[Tuple[float, str]], List[TranscriptMessage]]:
+    """The node on an in-memory bus; the texts it publishes as they come (the wall clock), and its
+    final transcripts (the times of their utterance's last block and of the text, its clock)."""
+    bus, heard, finals = InMemoryBus(), [], []  # type: Tuple[InMemoryBus, List[Tuple[float, str]], List[TranscriptMessage]]
+    bus.subscribe(TEXT_TOPIC, String, lambda message: heard.append((time.time(), message.data)))  # type: ignore[attr-defined]
+    bus.subscribe(TRANSCRIPT_TOPIC, TranscriptMessage, lambda message: _final(message, finals))
     node = SpeechEventNode(config, bus, clock, engine, executor)
     node.start()
     response = bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar))
     assert response.response == 1, "set_grammar refused"  # type: ignore[attr-defined]
-    return node, bus, heard
+    return node, bus, heard, finals
+
+
+def _final(message: object, finals: List[TranscriptMessage]) -> None:
+    if isinstance(message, TranscriptMessage) and message.final:
+        finals.append(message)
+
+
+@dataclasses.dataclass(frozen=True)
+class Timed:
+    """One utterance's text and where its time went, in seconds: ``latency`` from the end of the
+    last word to the text; ``to_node`` from the publication of the utterance's last block (the
+    last before the cut at the end of speech) to its arrival at the node; ``node`` from there to
+    the text (the wait for the end, and the recognition left after
+    it); NaN when no text came."""
+
+    text: str
+    latency: float
+    to_node: float
+    node: float
+
+
+NO_TEXT = Timed("", float("nan"), float("nan"), float("nan"))
+
+
+def timed(text: str, heard_at: float, sent: List[float], end: int, final: TranscriptMessage) -> Timed:
+    """An utterance whose blocks were sent at ``sent`` and whose last word ended at sample ``end``;
+    its text heard at ``heard_at``, ``final`` its transcript."""
+    began = sent[0] - BLOCK / RATE  # the first block is sent once it is recorded
+    last_sent = max((when for when in sent if when <= final.last_block), default=float("nan"))
+    return Timed(
+        text, heard_at - (began + end / RATE), final.last_block - last_sent, final.stamp - final.last_block
+    )
 
 
 def said(speech: Speech, mode: Mode, seed: int) -> Tuple[np.ndarray, int]:
@@ -168,26 +203,34 @@ def said(speech: Speech, mode: Mode, seed: int) -> Tuple[np.ndarray, int]:
     return np.clip(padded + noise, -1, 1).astype(np.float32), before + end
 
 
+def publish_in_real_time(publish: Callable[[Float32MultiArray], None], audio: np.ndarray) -> List[float]:
+    """Each block as soundDetection would, once it is recorded; returns when each was sent (the
+    wall clock)."""
+    began, sent = time.time(), []
+    for number, start in enumerate(range(0, audio.size, BLOCK)):
+        time.sleep(max(0.0, began + (number + 1) * BLOCK / RATE - time.time()))
+        sent.append(time.time())
+        publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+    return sent
+
+
 def latency(
     engine: Recognizer, config: SpeechEventConfig, grammar: str, audio: np.ndarray, end: int
-) -> Tuple[float, str]:
-    """Seconds from the end of the last word to the first text, and the text, in real time."""
+) -> Timed:
+    """The first text of ``audio``, said in real time, and where its time went."""
     executor = ThreadExecutor()
-    node, bus, heard = _node(config, engine, SystemClock(), executor, grammar)
+    node, bus, heard, finals = _node(config, engine, SystemClock(), executor, grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    began = time.monotonic()
-    for number, start in enumerate(range(0, audio.size, BLOCK)):
-        time.sleep(max(0.0, began + (number + 1) * BLOCK / RATE - time.monotonic()))
-        sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+    sent = publish_in_real_time(sound_detection.publish, audio)
     deadline = time.monotonic() + config.speech_pause_period + 30.0
-    while not heard and time.monotonic() < deadline:
+    while not (heard and finals) and time.monotonic() < deadline:
         time.sleep(0.005)
     node.stop()
     executor.shutdown(30.0)
-    if not heard:
-        return float("nan"), ""
+    if not (heard and finals):
+        return NO_TEXT
     at, text = heard[0]
-    return at - (began + end / RATE), text
+    return timed(text, at, sent, end, finals[0])
 
 
 def _figures(values: List[float]) -> str:
@@ -219,24 +262,31 @@ def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: floa
     for speech_set in sets:
         set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
         for mode in speech_set.modes:
-            times: Dict[str, List[float]] = {name: [] for name in settings}
-            wrong: Dict[str, int] = {name: 0 for name in settings}
+            timed: Dict[str, List[Timed]] = {name: [] for name in settings}
             for index, utterance in enumerate(speech):
                 audio, end = said(utterance, mode, index)
-                texts = []
-                for name, config in settings.items():  # in turn: load changes both alike
-                    seconds, text = latency(engine, config, grammar, audio, end)
-                    times[name].append(seconds)
-                    wrong[name] += spelt(text) != utterance.text
-                    texts.append(text)
+                for name, config in settings.items():  # in turn: load changes each alike
+                    timed[name].append(latency(engine, config, grammar, audio, end))
+                texts = [runs[-1].text for runs in timed.values()]
                 if len(set(texts)) > 1:
                     print(f"    {utterance.text!r}: {' / '.join(map(repr, texts))}", flush=True)
-            for name in settings:
-                print(
-                    f"  {set_name}, {mode.name}, {name}: {_figures(times[name])}; "
-                    f"{wrong[name]} of {len(speech)} texts not what was said",
-                    flush=True,
-                )
+            for name, runs in timed.items():
+                print(f"  {set_name}, {mode.name}, {name}: {_summary(runs, speech)}", flush=True)
+
+
+def _summary(runs: List[Timed], speech: List[Speech]) -> str:
+    """The figures of one set, mode and setting."""
+    wrong = sum(spelt(run.text) != utterance.text for run, utterance in zip(runs, speech))
+    to_node, node = (_median([getattr(run, part) for run in runs]) for part in ("to_node", "node"))
+    return (
+        f"{_figures([run.latency for run in runs])} (median: the last block to the node {to_node}, "
+        f"in the node {node}); {wrong} of {len(speech)} texts not what was said"
+    )
+
+
+def _median(values: List[float]) -> str:
+    known = [value for value in values if not np.isnan(value)]
+    return f"{statistics.median(known):.3f} s" if known else "-"
 
 
 def _grammar_file(grammar: str, folder: Path) -> str:
@@ -257,17 +307,24 @@ def roscore_latency(
     pace, the text timed at this process's subscriber. Every utterance answers
     (publish_unrecognized: a rejection's error comes when a text would)."""
     from bench.ros_graph import ros_graph  # rospy: only here
+    from speech_event.adapters.ros import generated_class, transcript_from_ros
 
     heard: List[Tuple[float, str]] = []
+    finals: List[TranscriptMessage] = []
 
     def on_text(message: Any) -> None:  # std_msgs' String
-        heard.append((time.monotonic(), message.data))
+        heard.append((time.time(), message.data))
+
+    def on_transcript(message: Any) -> None:
+        _final(transcript_from_ros(message), finals)
 
     def answered(count: int) -> Callable[[], bool]:
-        return lambda: len(heard) > count
+        return lambda: len(heard) > count and len(finals) > count
 
     with ros_graph("speech_event_bench_end_of_speech_") as graph:
         graph.transport.subscribe(TEXT_TOPIC, String, on_text)
+        transcript = generated_class(TranscriptMessage._type, "msg")
+        graph.transport.subscribe(TRANSCRIPT_TOPIC, transcript, on_transcript)
         for speech_set in sets:
             set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
             base = SpeechEventConfig(
@@ -280,23 +337,17 @@ def roscore_latency(
                 name, config = engine_for(recognizer, setting_config)
                 node = graph.start_node(format_config(config), name, graph.subscribed(TEXT_TOPIC))
                 for mode in speech_set.modes:
-                    times, wrong = [], 0
+                    runs = []
                     for index, utterance in enumerate(speech):
                         audio, end = said(utterance, mode, index)
                         count = len(heard)
-                        began = time.monotonic()
-                        for number, start in enumerate(range(0, audio.size, BLOCK)):
-                            time.sleep(max(0.0, began + (number + 1) * BLOCK / RATE - time.monotonic()))
-                            graph.signal.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+                        sent = publish_in_real_time(graph.signal.publish, audio)
                         wait_until(answered(count), "the text", 60)
                         at, text = heard[count]
-                        times.append(at - (began + end / RATE))
-                        wrong += spelt(text) != utterance.text
+                        runs.append(timed(text, at, sent, end, finals[count]))
                         time.sleep(config.speech_pause_period + 0.5)  # the room sound after it closed
                     print(
-                        f"  roscore: {set_name}, {mode.name}, {label}: {_figures(times)}; "
-                        f"{wrong} of {len(speech)} texts not what was said",
-                        flush=True,
+                        f"  roscore: {set_name}, {mode.name}, {label}: {_summary(runs, speech)}", flush=True
                     )
                 graph.stop_node(node)
 
@@ -306,7 +357,7 @@ def texts_on_fake_clock(
 ) -> List[str]:
     """The texts the node publishes for ``audio`` (at RATE) on the fake clock (free speech: "")."""
     clock = FakeClock()
-    node, bus, heard = _node(config, engine, clock, ClockExecutor(clock), grammar)
+    node, bus, heard, _ = _node(config, engine, clock, ClockExecutor(clock), grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     for start in range(0, audio.size, BLOCK):
         clock.advance(BLOCK / RATE)
