@@ -24,12 +24,14 @@ Sets:
     TAKES recordings of each digit, 1 to 5), per speaker, the word alone and with 0.2 and 1 s of
     room noise (pink, -50 dBFS) before and after it, as soundDetection sends it: against a digits
     grammar (exact / another digit / rejected), the robot's commands and yes|no (a digit is
-    outside both), and no grammar (the digit written, in words or figures); people saying single
-    words (tests/recordings/speech_commands, 16 kHz, 32 speakers) with the same margins against the
-    commands and yes|no: 'yes', 'no', 'stop' exact, the other words ('left', 'go', 'up', 'bird',
-    ...) published as nothing, and those words with pink noise and with babble 10 dB under them
-    (0.2 s margin) against the commands; then 30 s of pink noise and of babble alone at -30 dBFS
-    against the commands (nothing may be published).
+    outside both), and no grammar (the digit written, in words or figures); Speech Commands' digits
+    (16 kHz, 19 speakers) against the digits grammar, by the speakers' likely voice (women, men:
+    bench/speaker_pitch.py); people saying single words (tests/recordings/speech_commands, 16 kHz,
+    33 speakers) with the same margins against the commands and yes|no: 'yes', 'no', 'stop' exact,
+    the other words ('left', 'go', 'up', 'bird', 'seven', ...) published as nothing, and those
+    words with pink noise and with babble 10 dB under them (0.2 s margin) against the commands;
+    then 30 s of pink noise and of babble alone at -30 dBFS against the commands (nothing may be
+    published).
 
 Per engine and set: commands published exactly / rejected / as another command; out-of-grammar
 speech published as a phrase; the ratio the engine judged by (nats: the most likely phrase
@@ -58,10 +60,12 @@ from typing import Callable, Dict, List, Optional, Protocol, Sequence, TextIO, T
 
 import numpy as np
 
+from bench.speaker_pitch import speech_commands_voices
 from fixtures import recordings
 from fixtures.festival import VOICES as FESTIVAL_VOICES
 from fixtures.festival import festival_voice
 from fixtures.noises import at_level, read_audio, under
+from fixtures.recordings import FSDD, SPEECH_COMMANDS
 from fixtures.tts import speak_tts
 from harness.catalog import BASE, TINY_EN, ScenarioEngines
 from speech_event.adapters.executors import ClockExecutor
@@ -295,7 +299,6 @@ def cards_grammar(engine: str) -> str:
     return "|".join([recording.text for recording in recordings.cards()] + lines(COMMANDS))
 
 
-FSDD = ROOT / "tests" / "recordings" / "fsdd"
 SPEAKERS = ("george", "jackson", "lucas")
 DIGITS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine")
 MARGINS = (0.0, 0.2, 1.0)
@@ -336,9 +339,6 @@ def people(speaker: str, takes: int, margin: float) -> List[Tuple[str, np.ndarra
     return said
 
 
-SPEECH_COMMANDS = ROOT / "tests" / "recordings" / "speech_commands"
-
-
 def people_words(margin: float, phrases: Sequence[str], noise: Optional[str] = None) -> List[Sample]:
     """Each Speech Commands clip, ``margin`` seconds of room noise before and after, ``noise``
     (pink, babble) NOISY_SNR_DB under it when given: a word that is one of ``phrases`` expected as
@@ -352,6 +352,17 @@ def people_words(margin: float, phrases: Sequence[str], noise: Optional[str] = N
                 audio, noise, NOISY_SNR_DB, RATE, np.random.default_rng(zlib.crc32(path.name.encode()))
             )
         said.append((word if word in phrases else None, in_the_room(audio, margin, path.name)))
+    return said
+
+
+def wideband_digits(margin: float, voices: Dict[str, str]) -> Dict[str, List[Sample]]:
+    """Speech Commands' digits (16 kHz, 19 speakers), ``margin`` seconds of room noise before and
+    after each, by their speaker's likely voice in ``voices`` (bench/speaker_pitch.py)."""
+    said: Dict[str, List[Sample]] = {}
+    for digit in DIGITS:
+        for path in sorted((SPEECH_COMMANDS / digit).glob("*.wav")):
+            audio = in_the_room(read_audio(path, RATE), margin, path.name)
+            said.setdefault(voices[path.stem.split("_")[0]], []).append((digit, audio))
     return said
 
 
@@ -381,6 +392,12 @@ def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
                     ]
                     tally = judge(run, said, record, f"{name} {label} {speaker} {margin}")
                     report(f"(c) {label}, {speaker}, margin {margin} s", tally)
+        run.use_grammar("|".join(DIGITS))
+        voices = speech_commands_voices()
+        for margin in MARGINS:
+            for voice, said in sorted(wideband_digits(margin, voices).items()):
+                tally = judge(run, said, record, f"{name} wideband digits {voice} {margin}")
+                report(f"(c) digits, Speech Commands, likely {voice}, margin {margin} s", tally)
         run.use_grammar("")
         for margin in MARGINS:
             for speaker in SPEAKERS:

@@ -12,9 +12,9 @@ from typing import Dict, List
 
 import numpy as np
 
-from bench.grammar import FSDD, SPEECH_COMMANDS
 from fixtures import recordings
 from fixtures.noises import read_audio
+from fixtures.recordings import FSDD, SPEECH_COMMANDS
 
 RATE = 16000
 FRAME = int(0.04 * RATE)
@@ -41,11 +41,31 @@ def pitches(path: Path) -> List[float]:
     return found
 
 
+def voice(median: float) -> str:
+    """A speaker's likely voice from the median pitch of their voiced frames."""
+    return "man" if median < MEN_BELOW else "woman" if median > WOMEN_ABOVE else "undecided"
+
+
+def speech_commands_pitches() -> Dict[str, List[float]]:
+    """The pitches of each Speech Commands speaker's voiced frames, in all their clips here."""
+    speakers: Dict[str, List[float]] = collections.defaultdict(list)
+    for path in sorted(SPEECH_COMMANDS.glob("*/*.wav")):
+        speakers[path.stem.split("_")[0]] += pitches(path)
+    return speakers
+
+
+def speech_commands_voices() -> Dict[str, str]:
+    """Each Speech Commands speaker's likely voice."""
+    return {
+        speaker: voice(float(np.median(values))) if values else "undecided"
+        for speaker, values in speech_commands_pitches().items()
+    }
+
+
 def report(name: str, speakers: Dict[str, List[float]]) -> None:
     medians = {speaker: float(np.median(values)) for speaker, values in speakers.items() if values}
-    men = sum(median < MEN_BELOW for median in medians.values())
-    women = sum(median > WOMEN_ABOVE for median in medians.values())
-    undecided = len(medians) - men - women
+    voices = [voice(median) for median in medians.values()]
+    men, women, undecided = (voices.count(kind) for kind in ("man", "woman", "undecided"))
     print(f"{name}: {len(medians)} speakers, likely {men} men and {women} women, {undecided} undecided")
     print("  " + ", ".join(f"{speaker} {median:.0f} Hz" for speaker, median in sorted(medians.items())))
 
@@ -55,10 +75,7 @@ def main() -> None:
     for path in sorted(FSDD.glob("*.wav")):
         fsdd[path.stem.split("_")[1]] += pitches(path)
     report("FSDD (tests/recordings/fsdd)", fsdd)
-    words: Dict[str, List[float]] = collections.defaultdict(list)
-    for path in sorted(SPEECH_COMMANDS.glob("*/*.wav")):
-        words[path.stem.split("_")[0]] += pitches(path)
-    report("Speech Commands (tests/recordings/speech_commands)", words)
+    report("Speech Commands (tests/recordings/speech_commands)", speech_commands_pitches())
     debian = {
         "cards": [value for recording in recordings.cards() for value in pitches(recording.path)],
         "librivox": [value for recording in recordings.librivox() for value in pitches(recording.path)],

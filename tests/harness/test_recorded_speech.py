@@ -12,6 +12,7 @@ import pytest
 import soundfile
 
 from fixtures.noises import noise_like, read_audio, rms, under
+from fixtures.recordings import FSDD
 from harness.memory_runner import run_in_memory
 from harness.scenario import Scenario, ScenarioError, parse_scenario
 from harness.timeline import Publish, build_timeline
@@ -19,7 +20,6 @@ from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from tests.helpers.paths import ROOT
 
-FSDD = ROOT / "tests" / "recordings" / "fsdd"
 RATE = 48000
 
 
@@ -142,7 +142,7 @@ def test_no_held_out_recording_is_in_the_suite() -> None:
         "lucas",
     }
     commands = [path for path in files if "speech_commands" in path.parts]
-    assert len(commands) == 125
+    assert len(commands) == 203
     rows = (ROOT / "tests" / "recordings" / "speech_commands" / "SOURCE.txt").read_text().splitlines()
     listed = {row.split("\t")[0]: row.split("\t")[2] for row in rows if row.count("\t") == 3}
     partitions = {

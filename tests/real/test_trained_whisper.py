@@ -141,12 +141,12 @@ def test_peoples_digits_written_as_other_words_are_published_as_the_digit_and_ot
     said = [("4_george_0", "four"), ("4_lucas_0", "four"), ("8_george_0", "eight")]
     heard = []
     for name, digit in said:
-        audio = in_the_room(read_audio(ROOT / "tests" / "recordings" / "fsdd" / f"{name}.wav", 16000), name)
+        audio = in_the_room(read_audio(recordings.FSDD / f"{name}.wav", 16000), name)
         text = engine.transcribe(audio).text
         heard.append((text, spelt(engine.last_choice.free_text) != digit if engine.last_choice else None))
     assert heard == [("four", True), ("four", True), ("eight", True)]
     engine.use_grammar(load_grammar(ROOT / "harness" / "data" / "robot_commands.txt"))
-    down = ROOT / "tests" / "recordings" / "speech_commands" / "down"
+    down = recordings.SPEECH_COMMANDS / "down"
     texts = [
         engine.transcribe(in_the_room(read_audio(down / name, 16000), name)).text
         for name in ("8d4cdc60_nohash_1.wav", "439c84f4_nohash_1.wav")
