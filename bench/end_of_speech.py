@@ -163,8 +163,7 @@ class Timed:
     """One utterance's text and where its time went, in seconds: ``latency`` from the end of the
     last word to the text; ``to_node`` from the publication of the utterance's last block (the
     last before the cut at the end of speech) to its arrival at the node; ``node`` from there to
-    the text (the wait for the end, and the recognition left after
-    it); NaN when no text came."""
+    the text (the wait for the end, and the recognition left after it); NaN when no text came."""
 
     text: str
     latency: float
@@ -262,22 +261,22 @@ def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: floa
     for speech_set in sets:
         set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
         for mode in speech_set.modes:
-            timed: Dict[str, List[Timed]] = {name: [] for name in settings}
+            by_setting: Dict[str, List[Timed]] = {name: [] for name in settings}
             for index, utterance in enumerate(speech):
                 audio, end = said(utterance, mode, index)
                 for name, config in settings.items():  # in turn: load changes each alike
-                    timed[name].append(latency(engine, config, grammar, audio, end))
-                texts = [runs[-1].text for runs in timed.values()]
+                    by_setting[name].append(latency(engine, config, grammar, audio, end))
+                texts = [runs[-1].text for runs in by_setting.values()]
                 if len(set(texts)) > 1:
                     print(f"    {utterance.text!r}: {' / '.join(map(repr, texts))}", flush=True)
-            for name, runs in timed.items():
+            for name, runs in by_setting.items():
                 print(f"  {set_name}, {mode.name}, {name}: {_summary(runs, speech)}", flush=True)
 
 
 def _summary(runs: List[Timed], speech: List[Speech]) -> str:
     """The figures of one set, mode and setting."""
     wrong = sum(spelt(run.text) != utterance.text for run, utterance in zip(runs, speech))
-    to_node, node = (_median([getattr(run, part) for run in runs]) for part in ("to_node", "node"))
+    to_node, node = _median([run.to_node for run in runs]), _median([run.node for run in runs])
     return (
         f"{_figures([run.latency for run in runs])} (median: the last block to the node {to_node}, "
         f"in the node {node}); {wrong} of {len(speech)} texts not what was said"
