@@ -68,6 +68,7 @@ if TYPE_CHECKING:  # for type checkers (``X as X``: re-exported); at run time, s
     from speech_event.ports import Incremental as Incremental
     from speech_event.ports import Publisher as Publisher
     from speech_event.ports import PublisherStatus as PublisherStatus
+    from speech_event.ports import Received as Received
     from speech_event.ports import Recognizer as Recognizer
     from speech_event.ports import Stoppable as Stoppable
     from speech_event.ports import Timer as Timer
@@ -129,6 +130,7 @@ _PUBLIC: Dict[str, Tuple[str, ...]] = {
         "Incremental",
         "Publisher",
         "PublisherStatus",
+        "Received",
         "Recognizer",
         "Stoppable",
         "Timer",

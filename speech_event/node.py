@@ -14,6 +14,7 @@ and the periodic checks (``health``). They are called under the node's lock.
 """
 
 import logging
+import math
 import threading
 import time
 from typing import Callable, Dict, Optional, Tuple
@@ -55,6 +56,7 @@ from speech_event.ports import (
     Clock,
     Executor,
     PublisherStatus,
+    Received,
     Recognizer,
     Stoppable,
     Transport,
@@ -142,6 +144,7 @@ class SpeechEventNode:
         )
         self._utterances = 0
         self._started_at = 0.0
+        self._latest_arrival = -math.inf  # of the blocks taken
 
     @property
     def rejection_counts(self) -> Dict[str, int]:
@@ -219,12 +222,13 @@ class SpeechEventNode:
 
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition, never raises."""
+        arrival = message.received_at if isinstance(message, Received) else self._clock.now()
         try:
-            self._take(message)
+            self._take(message, arrival)
         except Exception:  # validation names every bad message; this is the last line of defence
             _LOG.exception("unexpected failure handling a message on %s; the node goes on", SIGNAL_TOPIC)
 
-    def _take(self, message: object) -> None:
+    def _take(self, message: object, arrival: float) -> None:
         signal = validate_signal(message, self._max_samples)
         with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
             if not self._enabled:  # the robot is speaking: its own voice is not to be transcribed
@@ -235,7 +239,9 @@ class SpeechEventNode:
                 return
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
-            self._arrived(signal.samples, self._clock.now())
+            # Two connections at once (a restart overlapping) may take their blocks out of order.
+            self._latest_arrival = max(self._latest_arrival, arrival)
+            self._arrived(signal.samples, self._latest_arrival)
 
     def _arrived(self, samples: Audio, arrival: float) -> None:
         """Under the lock: a block that arrived at ``arrival``, taken now or held for a decision."""

@@ -81,6 +81,15 @@ class Transport(Protocol):
         ...
 
 
+@runtime_checkable
+class Received(Protocol):
+    """A message its transport stamped, on the node's clock, when it read it off the wire (rospy:
+    before the callback, which may wait for the node's lock). A message without one arrived when
+    its callback runs (the in-memory bus calls back at once)."""
+
+    received_at: float
+
+
 class Timer(Protocol):
     """A callback set on a Clock; ``cancel`` keeps it from running."""
 

@@ -212,7 +212,8 @@ class StandIns:
 
     def publish(self, index: int, message: Float32MultiArray) -> None:
         """The incarnation that is up publishes event ``index`` (``message``: it builds the same
-        timeline); back once the node has it."""
+        timeline); back once the node has read it: it is stamped with the time it was read, and
+        the node's timers wait for its callback (speech_event/adapters/ros.py, AudioInFlight)."""
         self._tell(self._process, f"publish {index}")
         self._expect(self._process, f"published {index}")
         self._sent += 1

@@ -45,6 +45,61 @@ TEXT_QUEUE_SIZE = 100
 AUDIO_BUFFER_BYTES = 1 << 24
 
 
+class AudioInFlight:
+    """The audio messages read off their connection whose callback has not finished yet.
+
+    rospy reads a message, counts it in its bus statistics, then calls back on the same thread,
+    where the node may wait for its lock. A sim-time replay moves /clock on once the node has
+    received a block (harness/ros/runner.py), which is that count: the callback could then run
+    after the next clock step, and a timer due by then (a pause ending, a speculation gap) could
+    act before the block it should have seen. So a block is stamped with the ROS time when it is
+    read, before the count (``ReceivedAudio``), and a timer due after a block still in flight waits
+    for its callback (``RosTimer``). One per process, as rospy's connections are."""
+
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._stamps: Dict[int, float] = {}  # by message identity: when each was read
+
+    def read(self, message: object) -> float:
+        """``message`` was read off its connection now; its ROS time is returned."""
+        stamp = float(rospy.get_time())
+        with self._changed:
+            self._stamps[id(message)] = stamp
+        return stamp
+
+    def taken(self, message: object) -> None:
+        """The callback of ``message`` has finished."""
+        with self._changed:
+            if self._stamps.pop(id(message), None) is not None:
+                self._changed.notify_all()
+
+    def wait_for_those_read_by(self, when: float, timeout: float) -> bool:
+        """Wait until no message read at or before ``when`` is still in flight; False when
+        ``timeout`` ran out first."""
+        with self._changed:
+            return self._changed.wait_for(
+                lambda: all(stamp > when for stamp in self._stamps.values()), timeout
+            )
+
+
+AUDIO_IN_FLIGHT = AudioInFlight()
+
+
+class ReceivedAudio(numpy_msg(std_msgs.Float32MultiArray)):  # type: ignore[misc]
+    """soundDetection's message, numpy-deserialized, with ``received_at``: the ROS time it was
+    read off its connection (AudioInFlight says why that and not when its callback runs).
+
+    No ``__slots__`` here: genpy's message functions (str, ==) walk the fields named by the class's
+    ``__slots__``, which stay the message's own."""
+
+    received_at: float
+
+    def deserialize(self, data: bytes) -> "ReceivedAudio":
+        super().deserialize(data)
+        self.received_at = AUDIO_IN_FLIGHT.read(self)
+        return self
+
+
 def _to_ros(message: object) -> object:
     if isinstance(message, messages.String):
         return std_msgs.String(data=message.data)
@@ -219,7 +274,7 @@ class RosTransport:
     def subscribe(self, topic: str, message_type: type, callback: Callable[[object], None]) -> None:
         ros_type = _ROS_TYPES.get(message_type, message_type)
         if ros_type is std_msgs.Float32MultiArray:
-            ros_type = numpy_msg(ros_type)
+            ros_type, callback = ReceivedAudio, _in_flight_until_taken(callback)
         self._subscribers[topic] = rospy.Subscriber(
             topic, ros_type, callback, queue_size=None, buff_size=AUDIO_BUFFER_BYTES, tcp_nodelay=True
         )
@@ -333,6 +388,16 @@ EARLY = 1e-4
 _LONGEST_WAIT = 0.5
 
 
+def _in_flight_until_taken(callback: Callable[[object], None]) -> Callable[[object], None]:
+    def take(message: object) -> None:
+        try:
+            callback(message)
+        finally:
+            AUDIO_IN_FLIGHT.taken(message)
+
+    return take
+
+
 class RosTimer:
     """Runs a callback once ROS time reaches an absolute time.
 
@@ -363,7 +428,12 @@ class RosTimer:
                 if remaining > 0:
                     ticks.wait(min(remaining, _LONGEST_WAIT))
             if remaining <= 0:
-                callback()
+                # A block read by now is the node's before the timer is (AudioInFlight).
+                while not AUDIO_IN_FLIGHT.wait_for_those_read_by(when, _LONGEST_WAIT):
+                    if self._cancelled.is_set() or rospy.is_shutdown():
+                        return
+                if not self._cancelled.is_set():
+                    callback()
                 return
 
 

@@ -99,6 +99,44 @@ def test_the_ros_clock_runs_timers_on_ros_time_and_cancels_them(roscore: Dict[st
     assert not cancelled.is_set()
 
 
+def test_a_block_is_stamped_when_read_and_a_timer_due_after_it_waits_for_its_callback(
+    roscore: Dict[str, str],
+) -> None:
+    """rospy counts a message as received before it calls back: a sim-time replay moves the clock
+    on from that count, so the node's arrival time and its timers must not depend on when the
+    callback runs (it may wait for the node's lock)."""
+    transport, clock = RosTransport(), RosClock()
+    entered, release = threading.Event(), threading.Event()
+    order: List[str] = []
+    stamps: List[float] = []
+
+    def slow_callback(message: object) -> None:
+        stamps.append(message.received_at)  # type: ignore[attr-defined]
+        entered.set()
+        release.wait(30)
+        order.append("block taken")
+
+    transport.subscribe("/test/in_flight", Float32MultiArray, slow_callback)
+    audio_out = transport.advertise("/test/in_flight", Float32MultiArray)
+    wait_for(lambda: audio_out.connections() > 0, "the connection")
+    sent_at = clock.now()
+    audio_out.publish(Float32MultiArray(data=np.zeros(4096, np.float32)))
+    assert entered.wait(30)
+    called_back_at = clock.now()
+    timer_done = threading.Event()
+
+    def timer() -> None:
+        order.append("timer")
+        timer_done.set()
+
+    clock.call_at(clock.now(), timer)  # due now, after the block was read
+    time.sleep(0.3)  # long enough for a timer that does not wait to run; a waiting one waits on
+    release.set()
+    assert timer_done.wait(30)
+    assert order == ["block taken", "timer"]
+    assert sent_at <= stamps[0] <= called_back_at
+
+
 def test_every_script_names_the_system_python_so_a_pyenv_python3_cannot_break_rospy() -> None:
     for script in sorted((ROOT / "scripts").iterdir()):
         assert script.read_text().startswith("#!/usr/bin/python3\n"), script
