@@ -3,6 +3,7 @@ tree started as its own process (bench/ros.py, bench/partial.py). Needs rospy.""
 
 import contextlib
 import os
+import shutil
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -54,7 +55,7 @@ class RosGraph:
 @contextlib.contextmanager
 def ros_graph(prefix: str) -> Iterator[RosGraph]:
     """A roscore on a free port of 127.0.0.1 and this process as the node soundDetection; every
-    process started is stopped at the end."""
+    process started is stopped at the end, and its logs removed unless the run failed."""
     work = Path(tempfile.mkdtemp(prefix=prefix))
     port = free_port()
     environment = dict(
@@ -73,6 +74,10 @@ def ros_graph(prefix: str) -> Iterator[RosGraph]:
         transport = RosTransport()
         signal = transport.advertise(SIGNAL_TOPIC, Float32MultiArray)
         yield RosGraph(work, environment, processes, transport, signal)
+    except BaseException:
+        print(f"the processes' logs are kept in {work}", file=sys.stderr)
+        raise
     finally:
         rospy.signal_shutdown("bench done")
         processes.stop_all()
+    shutil.rmtree(work, ignore_errors=True)  # a run that ended well: its logs are of no use
