@@ -9,8 +9,9 @@ phrase of the grammar in force; in free speech a sentence the engine closes or o
 ``complete_answers``: speculation.py). The speculation starts as soon as the audio up to the cut
 is there, before the end is heard (with the gate, at ``speculation_gap`` after the last block, on
 the whole utterance), so its text is often ready when the decision comes; more blocks cancel it
-only when they move the cut (speech goes on). What follows the cut is room
-sound: it is dropped, and the next block starts the next utterance.
+only when they move the cut (speech goes on). What follows the cut begins the next utterance:
+the room after the speech, which is not transcribed unless speech follows (worth_transcribing),
+or a quiet word after the pause that the detector did not take for speech.
 
 While a decision is pending, the blocks that arrive are held, in order with their arrival times,
 and taken when it is made: the turn ends where the audio says, whether the engine decides in 50 ms

@@ -309,9 +309,14 @@ class SpeechEventNode:
             audio = self._assembler.close()
             self._background.utterance_closed()
             self._turn.drop_turn()
-            if audio is not None:  # what follows the cut is the room after the speech: dropped
+            if audio is not None:
                 self._submit(audio[:cut], False, self._turn.last_arrival)
             self._end.closed(at_cut=True)
+            if audio is not None and audio.size > cut:
+                # What follows the cut begins the next utterance: mostly the room after the
+                # speech, which is dropped unless speech follows, but a quiet word after a pause
+                # ("go somewhere ... and do something") is no speech to the detector until then.
+                self._arrived(audio[cut:], self._turn.last_arrival)
         if close_waits and not complete:  # the pause ended meanwhile: a block held since ends it
             self._turn.pause_again()
         for block in held:

@@ -16,6 +16,7 @@ from fixtures.audio import noise, speak_tones
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import SetGrammarRequest
+from speech_event.ports import Transcript
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.speech_end import AVERAGED_FRAMES
 from tests.helpers.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
@@ -90,6 +91,46 @@ def test_a_pause_inside_a_phrase_does_not_end_the_turn_when_the_words_so_far_are
 def test_speech_after_a_complete_phrase_is_the_next_utterance() -> None:
     rig = _run(CONFIG, _speech("stop", 0.5, "yes", 1.0))
     assert rig.texts() == ["stop", "yes"]
+
+
+class _Given(ToneRecognizer):
+    """The tones engine, keeping each stretch of audio it is given."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.given: List[np.ndarray] = []
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        self.given.append(np.array(audio))
+        return super().transcribe(audio)
+
+
+def _starts(audio: np.ndarray, given: List[np.ndarray]) -> List[Tuple[int, int]]:
+    """Where in ``audio`` each stretch given to the engine begins and ends (room noise makes the
+    first 64 samples of a stretch occur once)."""
+    windows = np.lib.stride_tricks.sliding_window_view(audio, 64)
+    found = []
+    for stretch in given:
+        (start,) = np.flatnonzero((windows == stretch[:64]).all(axis=1))
+        assert np.array_equal(audio[start : start + stretch.size], stretch)
+        found.append((int(start), int(start + stretch.size)))
+    return found
+
+
+def test_what_follows_the_cut_begins_the_next_utterance_so_no_audio_is_lost_between_turns() -> None:
+    audio = _speech(0.2, "stop", 0.5, "yes", 1.0)  # each stretch then begins in room noise
+    engine = _Given()
+    rig = Rig(CONFIG, engine)
+    assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(COMMANDS)).response == 1  # type: ignore[attr-defined]
+    rig.speak(audio, BLOCK)
+    rig.clock.advance(CONFIG.speech_pause_period + 1.0)
+    assert rig.texts() == ["stop", "yes"]
+    stretches = set(_starts(audio, engine.given))  # utterances and speculations on them
+    starts = sorted({start for start, _ in stretches})
+    assert len(starts) == 3  # "stop", "yes", and the room after it (speculated on, then dropped)
+    for before, after in zip(starts, starts[1:]):
+        # an utterance begins where the one before it was cut: no sample between them is lost
+        assert after in {end for start, end in stretches if start == before}
 
 
 def test_in_free_speech_a_complete_answer_ends_the_turn_and_other_words_wait_for_the_pause() -> None:
