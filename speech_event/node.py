@@ -14,7 +14,6 @@ and the periodic checks (``health``). They are called under the node's lock.
 """
 
 import logging
-import math
 import threading
 import time
 from typing import Callable, Dict, Optional, Tuple
@@ -144,7 +143,6 @@ class SpeechEventNode:
         )
         self._utterances = 0
         self._started_at = 0.0
-        self._latest_arrival = -math.inf  # of the blocks taken
 
     @property
     def rejection_counts(self) -> Dict[str, int]:
@@ -239,9 +237,7 @@ class SpeechEventNode:
                 return
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
-            # Two connections at once (a restart overlapping) may take their blocks out of order.
-            self._latest_arrival = max(self._latest_arrival, arrival)
-            self._arrived(signal.samples, self._latest_arrival)
+            self._arrived(signal.samples, arrival)
 
     def _arrived(self, samples: Audio, arrival: float) -> None:
         """Under the lock: a block that arrived at ``arrival``, taken now or held for a decision."""
