@@ -49,7 +49,7 @@ import dataclasses
 import statistics
 import time
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -359,19 +359,32 @@ def roscore_latency(
                 graph.stop_node(node)
 
 
-def texts_on_fake_clock(
-    engine: Recognizer, config: SpeechEventConfig, audio: np.ndarray, grammar: str = ""
-) -> List[str]:
-    """The texts the node publishes for ``audio`` (at RATE) on the fake clock (free speech: "")."""
+def played_on_fake_clock(
+    engine: Recognizer,
+    config: SpeechEventConfig,
+    steps: Iterable[Tuple[float, np.ndarray]],
+    grammar: str = "",
+) -> Tuple[List[str], SpeechEventNode]:
+    """The texts the node publishes, and the node, for ``steps`` on the fake clock (free speech:
+    ""): each the seconds the clock moves on, then the block sent (at RATE). Each speculation runs
+    at once: none is stopped halfway."""
     clock = FakeClock()
     node, bus, heard, _ = _node(config, engine, clock, ClockExecutor(clock), grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    for start in range(0, audio.size, BLOCK):
-        clock.advance(BLOCK / RATE)
-        sound_detection.publish(Float32MultiArray(data=audio[start : start + BLOCK]))
+    for seconds, block in steps:
+        clock.advance(seconds)
+        sound_detection.publish(Float32MultiArray(data=block))
     clock.advance(config.speech_pause_period + 1.0)
     node.stop()
-    return [text for _, text in heard]
+    return [text for _, text in heard], node
+
+
+def texts_on_fake_clock(
+    engine: Recognizer, config: SpeechEventConfig, audio: np.ndarray, grammar: str = ""
+) -> List[str]:
+    """The texts the node publishes for ``audio`` (at RATE), its blocks one after the other."""
+    steps = ((BLOCK / RATE, audio[start : start + BLOCK]) for start in range(0, audio.size, BLOCK))
+    return played_on_fake_clock(engine, config, steps, grammar)[0]
 
 
 def paused_speech() -> List[Tuple[str, np.ndarray]]:
@@ -420,20 +433,10 @@ def gated(voice: np.ndarray) -> List[Tuple[float, np.ndarray]]:
     ]
 
 
-def gate_speculations(
-    engine: Recognizer, config: SpeechEventConfig, blocks: Sequence[Tuple[float, np.ndarray]]
-) -> Tuple[List[str], int, int]:
-    """The texts, and the speculations started and used, for the gate's ``blocks`` on the fake
-    clock (each speculation runs at once: none is stopped halfway)."""
-    clock = FakeClock()
-    node, bus, heard, _ = _node(config, engine, clock, ClockExecutor(clock), "")
-    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
-    for when, block in blocks:
-        clock.advance(when - clock.now())
-        sound_detection.publish(Float32MultiArray(data=block))
-    clock.advance(config.speech_pause_period + 1.0)
-    node.stop()
-    return [text for _, text in heard], node.speculations.started, node.speculations.used
+def _after_each_other(blocks: Sequence[Tuple[float, np.ndarray]]) -> List[Tuple[float, np.ndarray]]:
+    """``gated`` blocks as steps: the seconds since the one before, then the block."""
+    times = [0.0] + [when for when, _ in blocks]
+    return [(when - before, block) for before, (when, block) in zip(times, blocks)]
 
 
 def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[float]) -> None:
@@ -453,9 +456,9 @@ def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[
         seconds += len(blocks) * BLOCK / RATE
         texts = {}
         for label, config in configs.items():
-            texts[label], count, useful = gate_speculations(engine, config, blocks)
-            started[label] += count
-            used[label] += useful
+            texts[label], node = played_on_fake_clock(engine, config, _after_each_other(blocks))
+            started[label] += node.speculations.started
+            used[label] += node.speculations.used
             split[label] += len(texts[label]) > 1
         if len({tuple(texts[label]) for label in configs if label != "off"}) > 1:
             texts_differ += 1
