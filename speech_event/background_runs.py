@@ -5,8 +5,9 @@ closed utterance's), and a partial result (partials.py): a Stoppable engine's pa
 Incremental engine's partial feed. Closed utterances always come first. The rules:
 
 - a speculation may start once the speaker has paused for ``speculation_gap`` (or a decision on the
-  end of speech waits for it), on an engine that can be stopped, with the worker idle and no
-  speculation there; it cancels a partial in progress (it may be the final text);
+  end of speech waits for it), on an engine that can be stopped (one that cannot only on the
+  audio up to the end of speech), with the worker idle and no speculation there; it cancels a
+  partial in progress (it may be the final text);
 - a partial may start when one is due (``partial_period``), with the worker idle and no speculation
   there, on audio that grew since the last;
 - a block cancels the speculation (what it transcribes is no longer the utterance), not the
@@ -178,7 +179,7 @@ class BackgroundRuns:
             return
         if so_far.cut is not None:  # one on other audio is worthless: the cut moved since
             self._speculation.drop(keep=so_far.cut)
-        if not self._speculation.may_start(so_far.recognizer, self.worker_idle()):
+        if not self._speculation.may_start(so_far.recognizer, self.worker_idle(), so_far.cut is not None):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = so_far.audio()[: so_far.cut]

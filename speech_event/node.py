@@ -57,7 +57,6 @@ from speech_event.ports import (
     PublisherStatus,
     Received,
     Recognizer,
-    Stoppable,
     Transport,
     engine_name,
 )
@@ -281,8 +280,8 @@ class SpeechEventNode:
 
     def _decide(self, cut: Optional[int]) -> None:
         """Under the lock: a speculation on the utterance up to ``cut`` decides whether the turn
-        ends there (with an engine that can be stopped: one that cannot does not speculate)."""
-        if cut is None or not self._enabled or not isinstance(self._recognizer, Stoppable):
+        ends there."""
+        if cut is None or not self._enabled:
             return
         self._end.decide(cut)
         complete = self._background.completed_on(cut)

@@ -5,9 +5,10 @@ utterances always come first), the node hands the audio collected so far to the 
 pause then ends with no new block, the closed utterance *is* that audio, so the speculation's
 result is its result: published at once, or as soon as the speculation ends, instead of being
 recognized again from the start. A block that arrives first makes the speculation worthless: it
-is cancelled (with the engine's ``stop`` where it has one, onnxruntime's RunOptions.terminate)
-and its engine time counted as wasted. A speculation never publishes by itself, so the node
-publishes exactly the texts it would publish without speculating, never later.
+is cancelled (with the engine's ``stop`` where it has one, onnxruntime's RunOptions.terminate;
+one that cannot be stopped runs on, its result unused) and its engine time counted as wasted. A
+speculation never publishes by itself, so the node publishes exactly the texts it would publish
+without speculating, never later.
 
 Early end of turn (``early_pause``, opt-in) builds on it: a speculation whose text is a complete
 answer lets the pause end after ``early_pause`` instead of ``speech_pause_period``.
@@ -84,12 +85,15 @@ class SpeculationRules:
         self.current: Optional[Speculation] = None
         self._last_text: Optional[str] = None  # the text of this utterance's last speculation
 
-    def may_start(self, recognizer: Recognizer, worker_idle: bool) -> bool:
-        """Whether to speculate now with ``recognizer``: only with an engine that can be stopped
-        (one that cannot would run a speculation made worthless to its end, and an utterance
-        closing meanwhile would wait for it: pocketsphinx, whose texts also depend on what it
-        heard before), only while the worker is idle (closed utterances first), one at a time."""
-        return self._wanted and isinstance(recognizer, Stoppable) and worker_idle and self.current is None
+    def may_start(self, recognizer: Recognizer, worker_idle: bool, at_end_of_speech: bool = False) -> bool:
+        """Whether to speculate now with ``recognizer``, only while the worker is idle (closed
+        utterances first), one at a time. With an engine that cannot be stopped (pocketsphinx),
+        only on the audio up to where the speech so far ended (``at_end_of_speech``, with
+        end_of_speech): the decision on the end of the turn needs that text whatever it costs.
+        Elsewhere such a speculation, made worthless by the next block, would run to its end,
+        and an utterance closing meanwhile would wait for it."""
+        able = isinstance(recognizer, Stoppable) or at_end_of_speech
+        return self._wanted and able and worker_idle and self.current is None
 
     def start(self, samples: int, recognizer: Recognizer, grammar: Optional[Grammar]) -> Speculation:
         """Speculate on the first ``samples`` of the utterance being collected."""

@@ -5,7 +5,7 @@ takes, the same blocks give the same texts."""
 
 import dataclasses
 from pathlib import Path
-from typing import List, Tuple
+from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 import pytest
@@ -13,13 +13,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
+from harness.memory_runner import run_in_memory
+from harness.scenario import load_scenario
+from speech_event.config import SpeechEventConfig
+from speech_event.grammar import Grammar
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import SetGrammarRequest
-from speech_event.ports import Transcript
+from speech_event.ports import Recognizer, Stoppable, Transcript
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.speech_end import AVERAGED_FRAMES
 from tests.helpers.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
+from tests.helpers.paths import ROOT
 from tests.helpers.rig import AT_16K, Rig
 from tests.helpers.scenario_files import SCENARIOS
 
@@ -44,8 +49,37 @@ def _speech(*parts: object) -> np.ndarray:
     return np.concatenate(pieces).astype(np.float32)
 
 
-def _run(config: object, audio: np.ndarray, grammar: str = COMMANDS, job_seconds: float = 0.0) -> Rig:
-    rig = Rig(config, ToneRecognizer(), job_seconds=job_seconds)  # type: ignore[arg-type]
+class CannotBeStopped:
+    """The tones engine as one that cannot be stopped, as pocketsphinx (no ``stop``): it speculates
+    only on the audio up to the end of speech."""
+
+    sample_rate = ToneRecognizer.sample_rate
+
+    def __init__(self) -> None:
+        self._engine = ToneRecognizer()
+
+    def check_grammar(self, grammar: Grammar) -> None:
+        self._engine.check_grammar(grammar)
+
+    def use_grammar(self, grammar: Optional[Grammar]) -> None:
+        self._engine.use_grammar(grammar)
+
+    def transcribe(self, audio: np.ndarray) -> Transcript:
+        return self._engine.transcribe(audio)
+
+
+Engine = Callable[[], Recognizer]
+ENGINES: List[Engine] = [ToneRecognizer, CannotBeStopped]
+
+
+def _run(
+    config: object,
+    audio: np.ndarray,
+    grammar: str = COMMANDS,
+    job_seconds: float = 0.0,
+    engine: Engine = ToneRecognizer,
+) -> Rig:
+    rig = Rig(config, engine(), job_seconds=job_seconds)  # type: ignore[arg-type]
     if grammar:
         assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
     rig.speak(audio, BLOCK)
@@ -141,9 +175,10 @@ def test_in_free_speech_a_complete_answer_ends_the_turn_and_other_words_wait_for
     assert answer.published[0][0] < 1.0 < other.published[0][0]
 
 
-def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_last() -> None:
+@pytest.mark.parametrize("engine", ENGINES, ids=lambda engine: engine.__name__)
+def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_last(engine: Engine) -> None:
     audio = _speech("stop")
-    rig = _run(CONFIG, audio)
+    rig = _run(CONFIG, audio, engine=engine)
     last_block = -(-audio.size // BLOCK) * BLOCK / RATE
     assert _timed(rig) == [(round(last_block + CONFIG.end_of_speech, 6), "stop")]
 
@@ -175,13 +210,13 @@ SAID: List[Tuple[object, ...]] = [
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.sampled_from(SAID), st.sampled_from([COMMANDS, ""]), st.floats(0.0, 2.5))
+@given(st.sampled_from(SAID), st.sampled_from([COMMANDS, ""]), st.floats(0.0, 2.5), st.sampled_from(ENGINES))
 def test_however_long_the_engine_takes_the_same_blocks_give_the_same_texts(
-    said: Tuple[object, ...], grammar: str, job_seconds: float
+    said: Tuple[object, ...], grammar: str, job_seconds: float, engine: Engine
 ) -> None:
     audio = _speech(*said)
     at_once = _run(CONFIG, audio, grammar)
-    slow = _run(CONFIG, audio, grammar, job_seconds)
+    slow = _run(CONFIG, audio, grammar, job_seconds, engine)
     assert slow.texts() == at_once.texts()
     assert _discarded_after_speech(slow) == _discarded_after_speech(at_once)
 
@@ -190,10 +225,14 @@ WORDS = ("stop", "yes", "go", "to the kitchen", "maybe")
 
 
 def _spoken_with_gaps(
-    config: object, turns: List[Tuple[str, float]], grammar: str, job_seconds: float
+    config: object,
+    turns: List[Tuple[str, float]],
+    grammar: str,
+    job_seconds: float,
+    engine: Engine = ToneRecognizer,
 ) -> Rig:
     """Each word's blocks, then that many seconds without a block (the robot's gate)."""
-    rig = Rig(config, ToneRecognizer(), job_seconds=job_seconds)  # type: ignore[arg-type]
+    rig = Rig(config, engine(), job_seconds=job_seconds)  # type: ignore[arg-type]
     if grammar:
         assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
     for word, gap in turns:
@@ -210,14 +249,20 @@ def _spoken_with_gaps(
     st.sampled_from([0.5, 1.5]),
     st.floats(0.0, 2.5),
     st.sampled_from([0.1, 0.3]),
+    st.sampled_from(ENGINES),
 )
 def test_with_gaps_between_blocks_however_long_the_engine_takes_the_texts_are_the_same(
-    turns: List[Tuple[str, float]], grammar: str, pause: float, job_seconds: float, speculation_gap: float
+    turns: List[Tuple[str, float]],
+    grammar: str,
+    pause: float,
+    job_seconds: float,
+    speculation_gap: float,
+    engine: Engine,
 ) -> None:
     config = dataclasses.replace(CONFIG, speech_pause_period=pause)
     at_once = _spoken_with_gaps(config, turns, grammar, 0.0)
     slow = _spoken_with_gaps(
-        dataclasses.replace(config, speculation_gap=speculation_gap), turns, grammar, job_seconds
+        dataclasses.replace(config, speculation_gap=speculation_gap), turns, grammar, job_seconds, engine
     )
     assert slow.texts() == at_once.texts()
 
@@ -237,3 +282,31 @@ def test_every_scenario_passes_with_the_turn_ending_at_the_end_of_speech(
     path: Path, recognition_seconds: float
 ) -> None:
     check_scenario_ending_at_end_of_speech(path, recognition_seconds)
+
+
+def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the_end_of_speech() -> None:
+    assert not isinstance(CannotBeStopped(), Stoppable)
+    # "stop", 0.35 s of room (an end heard, a cut decided: the phrase is complete), then "yes"
+    # with blocks that stop with it (the end heard in the pause in blocks).
+    rig = _run(CONFIG, _speech("stop", 0.35, "yes"), engine=CannotBeStopped)
+    assert rig.texts() == ["stop", "yes"]
+    assert rig.node.speculations.started == 2  # one for each cut, none at speculation_gap alone
+    without = dataclasses.replace(CONFIG, end_of_speech=0.0)
+    off = _run(without, _speech("stop", 0.35, "yes"), engine=CannotBeStopped)
+    assert off.texts() == []  # one utterance, "stop yes": no phrase of the grammar
+    assert off.node.speculations.started == 0
+
+
+@pytest.mark.parametrize("end_of_speech", [0.3, 0.0], ids=["on", "off"])
+def test_pocketsphinx_ends_the_turn_end_of_speech_after_the_last_block(end_of_speech: float) -> None:
+    # espeak says two commands of the robot's grammar, its blocks stopping with the speech (the
+    # gate); pocketsphinx, which cannot be stopped, decides on each end as the neural engines do.
+    scenario = load_scenario(str(ROOT / "scenarios" / "partials_pocketsphinx.toml"), SpeechEventConfig())
+    config = dataclasses.replace(scenario.config, end_of_speech=end_of_speech, partial_period=0.0)
+    outcome = run_in_memory(dataclasses.replace(scenario, config=config))
+    wait = end_of_speech or config.speech_pause_period
+    ends = [message.last_block for message in outcome.transcripts if message.final]
+    assert [(round(p.time, 6), p.text) for p in outcome.published] == [
+        (round(ends[0] + wait, 6), "go to the kitchen"),
+        (round(ends[1] + wait, 6), "what time is it"),
+    ]

@@ -81,8 +81,11 @@ def test_a_stoppable_engine_may_speculate_while_the_worker_is_idle() -> None:
     assert SpeculationRules(CONFIG).may_start(StoppableRecognizer(), worker_idle=True)
 
 
-def test_an_engine_that_cannot_be_stopped_never_speculates() -> None:
-    assert not SpeculationRules(CONFIG).may_start(SpyRecognizer(), worker_idle=True)
+def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the_end_of_speech() -> None:
+    rules = SpeculationRules(CONFIG)
+    assert not rules.may_start(SpyRecognizer(), worker_idle=True)
+    assert rules.may_start(SpyRecognizer(), worker_idle=True, at_end_of_speech=True)
+    assert not rules.may_start(SpyRecognizer(), worker_idle=False, at_end_of_speech=True)
 
 
 def test_no_speculation_while_the_worker_is_busy() -> None:
