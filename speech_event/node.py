@@ -60,7 +60,7 @@ from speech_event.ports import (
     Transport,
     engine_name,
 )
-from speech_event.speculation import SpeculationCounts
+from speech_event.speculation import SpeculationCounts, decides_at_end_of_speech
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
 from speech_event.turn_taking import TurnTaking
 from speech_event.watchdog import Watchdog
@@ -280,8 +280,8 @@ class SpeechEventNode:
 
     def _decide(self, cut: Optional[int]) -> None:
         """Under the lock: a speculation on the utterance up to ``cut`` decides whether the turn
-        ends there."""
-        if cut is None or not self._enabled:
+        ends there (with an engine that cannot be stopped, only with a grammar in force)."""
+        if cut is None or not self._enabled or not decides_at_end_of_speech(self._recognizer, self._grammar):
             return
         self._end.decide(cut)
         complete = self._background.completed_on(cut)

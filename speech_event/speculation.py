@@ -88,10 +88,10 @@ class SpeculationRules:
     def may_start(self, recognizer: Recognizer, worker_idle: bool, at_end_of_speech: bool = False) -> bool:
         """Whether to speculate now with ``recognizer``, only while the worker is idle (closed
         utterances first), one at a time. With an engine that cannot be stopped (pocketsphinx),
-        only on the audio up to where the speech so far ended (``at_end_of_speech``, with
-        end_of_speech): the decision on the end of the turn needs that text whatever it costs.
-        Elsewhere such a speculation, made worthless by the next block, would run to its end,
-        and an utterance closing meanwhile would wait for it."""
+        only on the audio up to where the speech so far ended (``at_end_of_speech``: where
+        ``decides_at_end_of_speech``): the decision on the end of the turn needs that text
+        whatever it costs. Elsewhere such a speculation, made worthless by the next block, would
+        run to its end, and an utterance closing meanwhile would wait for it."""
         able = isinstance(recognizer, Stoppable) or at_end_of_speech
         return self._wanted and able and worker_idle and self.current is None
 
@@ -178,6 +178,16 @@ class SpeculationRules:
     def running_for(self, job: RecognitionJob) -> bool:
         """Whether ``job``'s recognition is a speculation that runs now."""
         return self.current is not None and self.current.adopted is job and self.current.running
+
+
+def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar]) -> bool:
+    """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py): an
+    engine that can be stopped always; one that cannot (pocketsphinx) only with a grammar in
+    force. Each decision runs it to its end on the whole utterance so far, and in free speech its
+    text is never a closed sentence (it writes no punctuation), so the turn would end at the pause
+    anyway; its free decoding of a command and a second of babble after it takes 2.1 s, and a
+    decision at each end heard in it kept the text up to 15 s late (bench/end_of_speech.py)."""
+    return isinstance(recognizer, Stoppable) or grammar is not None
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:

@@ -215,7 +215,7 @@ def test_however_long_the_engine_takes_the_same_blocks_give_the_same_texts(
     said: Tuple[object, ...], grammar: str, job_seconds: float, engine: Engine
 ) -> None:
     audio = _speech(*said)
-    at_once = _run(CONFIG, audio, grammar)
+    at_once = _run(CONFIG, audio, grammar, engine=engine)
     slow = _run(CONFIG, audio, grammar, job_seconds, engine)
     assert slow.texts() == at_once.texts()
     assert _discarded_after_speech(slow) == _discarded_after_speech(at_once)
@@ -260,7 +260,7 @@ def test_with_gaps_between_blocks_however_long_the_engine_takes_the_texts_are_th
     engine: Engine,
 ) -> None:
     config = dataclasses.replace(CONFIG, speech_pause_period=pause)
-    at_once = _spoken_with_gaps(config, turns, grammar, 0.0)
+    at_once = _spoken_with_gaps(config, turns, grammar, 0.0, engine)
     slow = _spoken_with_gaps(
         dataclasses.replace(config, speculation_gap=speculation_gap), turns, grammar, job_seconds, engine
     )
@@ -295,6 +295,10 @@ def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the
     off = _run(without, _speech("stop", 0.35, "yes"), engine=CannotBeStopped)
     assert off.texts() == []  # one utterance, "stop yes": no phrase of the grammar
     assert off.node.speculations.started == 0
+    # In free speech it does not decide (its text is never a closed sentence): the pause ends it.
+    free = _run(CONFIG, _speech("stop", 0.35, "yes"), grammar="", engine=CannotBeStopped)
+    assert free.texts() == ["stop yes"]
+    assert free.node.speculations.started == 0
 
 
 @pytest.mark.parametrize("end_of_speech", [0.3, 0.0], ids=["on", "off"])

@@ -11,7 +11,13 @@ from speech_event.grammar import Grammar, requested_grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.screen import Discard
 from speech_event.ports import Recognizer, Stoppable, Transcript
-from speech_event.speculation import Speculation, SpeculationCounts, SpeculationRules, is_complete
+from speech_event.speculation import (
+    Speculation,
+    SpeculationCounts,
+    SpeculationRules,
+    decides_at_end_of_speech,
+    is_complete,
+)
 from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 CONFIG = SpeechEventConfig(speculative_recognition=True, complete_answers="yes,no")
@@ -86,6 +92,13 @@ def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the
     assert not rules.may_start(SpyRecognizer(), worker_idle=True)
     assert rules.may_start(SpyRecognizer(), worker_idle=True, at_end_of_speech=True)
     assert not rules.may_start(SpyRecognizer(), worker_idle=False, at_end_of_speech=True)
+
+
+def test_an_engine_that_cannot_be_stopped_decides_on_the_end_of_speech_only_with_a_grammar() -> None:
+    assert decides_at_end_of_speech(StoppableRecognizer(), None)
+    assert decides_at_end_of_speech(StoppableRecognizer(), COMMANDS)
+    assert decides_at_end_of_speech(SpyRecognizer(), COMMANDS)
+    assert not decides_at_end_of_speech(SpyRecognizer(), None)
 
 
 def test_no_speculation_while_the_worker_is_busy() -> None:
