@@ -48,6 +48,11 @@ class EndOfTurn:
         self._held: List[HeldBlock] = []
         self.close_waits = False  # the pause ended while a decision was pending
         self._after_cut = False  # the utterance being collected follows a cut at the end of speech
+        # Set by the node for an engine that cannot be stopped (pocketsphinx): one decision an
+        # utterance. Each is a decoding of the whole utterance so far that runs to its end, and
+        # under babble an end is heard again and again: deciding each, a rejection came up to 9 s
+        # later than at the pause (bench/end_of_speech.py).
+        self.decide_once = False
 
     def heard(self, samples: np.ndarray) -> None:
         """The utterance being collected took these samples."""
@@ -69,10 +74,12 @@ class EndOfTurn:
         when the decision comes: the speech's end once its pad is taken, or once no block came
         for speculation_gap (``paused``), where a decision on that pause would cut (gap_end);
         None while speech goes on."""
-        if self.on and self.deciding is None:
-            cut = self._after_last_block() if paused else self._ends.padded_end()
-            return cut if cut is not None and cut > self._decided else None
-        return self.deciding
+        if not self.on or self.deciding is not None:
+            return self.deciding
+        if self._no_more_decisions():
+            return None
+        cut = self._after_last_block() if paused else self._ends.padded_end()
+        return cut if cut is not None and cut > self._decided else None
 
     def gap_end(self) -> Optional[int]:
         """A cut to decide when no block came for end_of_speech: after the last block, if speech
@@ -83,9 +90,13 @@ class EndOfTurn:
         return self._ends.samples if self._ends.heard_speech() else None
 
     def _new(self, cut: Optional[int]) -> Optional[int]:
-        if cut is None or self.deciding is not None or cut <= self._decided:
+        if cut is None or self.deciding is not None or cut <= self._decided or self._no_more_decisions():
             return None
         return cut
+
+    def _no_more_decisions(self) -> bool:
+        """With decide_once, once a cut of this utterance was decided on (it went on)."""
+        return self.decide_once and self._decided > 0
 
     def decide(self, cut: int) -> None:
         """A speculation on the utterance's first ``cut`` samples decides whether the turn ends."""

@@ -301,16 +301,40 @@ def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the
     assert free.node.speculations.started == 0
 
 
-@pytest.mark.parametrize("end_of_speech", [0.3, 0.0], ids=["on", "off"])
-def test_pocketsphinx_ends_the_turn_end_of_speech_after_the_last_block(end_of_speech: float) -> None:
-    # espeak says two commands of the robot's grammar, its blocks stopping with the speech (the
-    # gate); pocketsphinx, which cannot be stopped, decides on each end as the neural engines do.
-    scenario = load_scenario(str(ROOT / "scenarios" / "partials_pocketsphinx.toml"), SpeechEventConfig())
-    config = dataclasses.replace(scenario.config, end_of_speech=end_of_speech, partial_period=0.0)
-    outcome = run_in_memory(dataclasses.replace(scenario, config=config))
-    wait = end_of_speech or config.speech_pause_period
-    ends = [message.last_block for message in outcome.transcripts if message.final]
-    assert [(round(p.time, 6), p.text) for p in outcome.published] == [
-        (round(ends[0] + wait, 6), "go to the kitchen"),
-        (round(ends[1] + wait, 6), "what time is it"),
+def test_an_engine_that_cannot_be_stopped_decides_once_an_utterance() -> None:
+    # The first end heard ("go": no phrase) is decided and the turn goes on; the next end waits
+    # for the pause. The engine that can be stopped decides it, and ends the turn there.
+    audio = _speech("go", 0.5, "to the kitchen", 1.0)
+    once = _run(CONFIG, audio, engine=CannotBeStopped)
+    each = _run(CONFIG, audio)
+    assert once.texts() == each.texts() == ["go to the kitchen"]
+    assert once.node.speculations.started == 1
+    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    assert _timed(once) == [(round(last_block + CONFIG.speech_pause_period, 6), "go to the kitchen")]
+    assert each.published[0][0] < last_block  # inside the room sound after the words
+
+
+def test_pocketsphinx_decides_on_the_end_of_speech_in_grammar_mode_once_an_utterance() -> None:
+    # scenarios/tts_end_of_speech.toml: espeak says commands of the robot's grammar, behind the
+    # gate, then with the driver's room sound after; then a command with a pause inside, and a word
+    # in free speech. Each text's utterance ends at its last block (the block where the end was heard).
+    scenario = load_scenario(str(ROOT / "scenarios" / "tts_end_of_speech.toml"), SpeechEventConfig())
+    pause = scenario.config.speech_pause_period
+    timed = {}
+    for end_of_speech in (0.3, 0.0):
+        config = dataclasses.replace(scenario.config, end_of_speech=end_of_speech)
+        outcome = run_in_memory(dataclasses.replace(scenario, config=config))
+        ends = [message.last_block for message in outcome.transcripts if message.final]
+        timed[end_of_speech] = [(round(p.time - end, 6), p.text) for p, end in zip(outcome.published, ends)]
+    assert timed[0.0] == [
+        (pause, "go to the kitchen"),
+        (pause, "what time is it"),
+        (pause, "go to the kitchen"),
+        (pause, "hello"),
+    ]
+    assert timed[0.3] == [
+        (0.3, "go to the kitchen"),  # the gate: no block for end_of_speech
+        (0.0, "what time is it"),  # heard in the room sound, decided as the block came
+        (pause, "go to the kitchen"),  # "go to" was decided (no phrase): the pause ends it
+        (pause, "hello"),  # free speech: pocketsphinx does not decide
     ]
