@@ -20,7 +20,7 @@ at the same times gives the same utterances and the same texts, at any load.
 """
 
 from dataclasses import dataclass
-from typing import List, Optional
+from typing import Callable, List, Optional
 
 import numpy as np
 
@@ -40,7 +40,11 @@ class EndOfTurn:
     """The decisions on the utterance being collected, and the blocks held meanwhile. Every method
     is called under the node's lock."""
 
-    def __init__(self, config: SpeechEventConfig) -> None:
+    def __init__(self, config: SpeechEventConfig, decides_once: Callable[[], bool] = lambda: False) -> None:
+        """``decides_once``: whether the engine in use is one that cannot be stopped (pocketsphinx),
+        which decides once an utterance. Each decision is a decoding of the whole utterance so far
+        that runs to its end, and under babble an end is heard again and again: deciding each, a
+        rejection came up to 9 s later than at the pause (bench/end_of_speech.py)."""
         self.on = ends_at_end_of_speech(config)
         self._ends = SpeechEnds(config.sample_rate, config.end_of_speech or config.speech_pause_period)
         self.deciding: Optional[int] = None  # the cut being decided: samples of the utterance
@@ -48,11 +52,7 @@ class EndOfTurn:
         self._held: List[HeldBlock] = []
         self.close_waits = False  # the pause ended while a decision was pending
         self._after_cut = False  # the utterance being collected follows a cut at the end of speech
-        # Set by the node for an engine that cannot be stopped (pocketsphinx): one decision an
-        # utterance. Each is a decoding of the whole utterance so far that runs to its end, and
-        # under babble an end is heard again and again: deciding each, a rejection came up to 9 s
-        # later than at the pause (bench/end_of_speech.py).
-        self.decide_once = False
+        self._decides_once = decides_once
 
     def heard(self, samples: np.ndarray) -> None:
         """The utterance being collected took these samples."""
@@ -95,8 +95,8 @@ class EndOfTurn:
         return cut
 
     def _no_more_decisions(self) -> bool:
-        """With decide_once, once a cut of this utterance was decided on (it went on)."""
-        return self.decide_once and self._decided > 0
+        """With an engine that decides once, once a cut of this utterance was decided on (it went on)."""
+        return self._decided > 0 and self._decides_once()
 
     def decide(self, cut: int) -> None:
         """A speculation on the utterance's first ``cut`` samples decides whether the turn ends."""

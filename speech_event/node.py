@@ -116,8 +116,7 @@ class SpeechEventNode:
         self._grammar = starting_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
-        self._end = EndOfTurn(config)
-        self._end.decide_once = not isinstance(recognizer, Stoppable)
+        self._end = EndOfTurn(config, lambda: not isinstance(self._recognizer, Stoppable))
         self._turn = TurnTaking(
             config,
             clock,
@@ -412,7 +411,6 @@ class SpeechEventNode:
             self._background.drop()
             self._undecided()
             self._language, self._recognizer = language, recognizer
-            self._end.decide_once = not isinstance(recognizer, Stoppable)
         _LOG.info("speechEvent transcribes %s now", language)
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:

@@ -183,7 +183,7 @@ class SpeculationRules:
 def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar]) -> bool:
     """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py): an
     engine that can be stopped always; one that cannot (pocketsphinx) only with a grammar in
-    force, and once an utterance (EndOfTurn.decide_once). Each decision runs it to its end on the
+    force, and once an utterance (EndOfTurn's decides_once). Each decision runs it to its end on the
     whole utterance so far, and in free speech its text is never a closed sentence (it writes no
     punctuation), so the turn would end at the pause anyway; its free decoding of a command and a
     second of babble after it takes 2.1 s, and a decision at each end heard in it kept the text

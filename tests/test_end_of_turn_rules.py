@@ -33,9 +33,8 @@ def test_each_later_cut_of_an_utterance_is_decided() -> None:
     assert end.speculation_cut(paused=True) == end.gap_end() == second
 
 
-def test_with_decide_once_only_the_first_cut_of_an_utterance_is_decided() -> None:
-    end = EndOfTurn(CONFIG)
-    end.decide_once = True
+def test_with_an_engine_that_decides_once_only_the_first_cut_of_an_utterance_is_decided() -> None:
+    end = EndOfTurn(CONFIG, decides_once=lambda: True)
     first = _spoken(end, "go")
     assert end.gap_end() == first
     _went_on(end, first)

@@ -12,8 +12,8 @@ hermetic scenarios are checked so in tests/test_every_scenario.py, those on trai
 tests/real/test_trained_scenarios.py.
 
 And with the turn ending at the end of speech (end_of_speech 0.3): what the scenario expects at
-0 s (but its partial results), and at 1 s the texts of the node that waits for the pause (tests/test_end_of_turn.py, and the
-trained scenarios in tests/real/test_trained_scenarios.py)."""
+0 s (but its partial results), and at 1 s the texts of the node that waits for the pause
+(tests/test_end_of_turn.py, and the trained scenarios in tests/real/test_trained_scenarios.py)."""
 
 import dataclasses
 from pathlib import Path
