@@ -63,7 +63,7 @@ from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.adapters.system_clock import SystemClock
-from speech_event.config import SpeechEventConfig, format_config
+from speech_event.config import SPECULATION_GAP, SpeechEventConfig, format_config
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
 from speech_event.messages import Float32MultiArray, SetGrammarRequest, String, TranscriptMessage
 from speech_event.node import SpeechEventNode
@@ -251,6 +251,11 @@ def _figures(values: List[float]) -> str:
     return f"median {statistics.median(ordered):.2f} s, 90th {p90:.2f} s{none}"
 
 
+def turned_off(config: SpeechEventConfig) -> SpeechEventConfig:
+    """``config`` as the node was before issue 44: end_of_speech off, speculating at 0.3 s."""
+    return dataclasses.replace(config, end_of_speech=0.0, speculation_gap=SPECULATION_GAP)
+
+
 def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, SpeechEventConfig]:
     """The settings compared: off (today), end_of_speech ``setting`` speculating at the default
     speculation_gap, and speculating at ``gap`` (0: not measured)."""
@@ -267,7 +272,7 @@ def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: floa
     """Each set in each of its modes, off and on. Every utterance answers, as on the roscore
     (publish_unrecognized: a rejection's error comes when a text would)."""
     settings = compared(
-        SpeechEventConfig(health_check_period=3600.0, publish_unrecognized=True), setting, gap
+        turned_off(SpeechEventConfig(health_check_period=3600.0, publish_unrecognized=True)), setting, gap
     )
     for speech_set in sets:
         set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
@@ -338,6 +343,8 @@ def roscore_latency(
         for speech_set in sets:
             set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
             base = SpeechEventConfig(
+                end_of_speech=0.0,
+                speculation_gap=SPECULATION_GAP,
                 health_check_period=3600.0,
                 publish_unrecognized=True,
                 quantization=quantization or "none",
@@ -402,7 +409,7 @@ def paused_speech() -> List[Tuple[str, np.ndarray]]:
 
 
 def measure_splits(engine: Recognizer, setting: float) -> None:
-    base = SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0)
+    base = turned_off(SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0))
     on = dataclasses.replace(base, end_of_speech=setting)
     rng = np.random.default_rng(0)
     speech = paused_speech()
@@ -443,7 +450,7 @@ def _after_each_other(blocks: Sequence[Tuple[float, np.ndarray]]) -> List[Tuple[
 
 
 def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[float]) -> None:
-    off = SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0)
+    off = turned_off(SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0))
     configs = {"off": off}
     configs.update(
         {
@@ -478,7 +485,7 @@ def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[
 
 
 def measure_texts(engine: Recognizer, setting: float) -> None:
-    base = SpeechEventConfig(health_check_period=3600.0)
+    base = turned_off(SpeechEventConfig(health_check_period=3600.0))
     on = dataclasses.replace(base, end_of_speech=setting)
     phrases = lines(COMMANDS)
     for grammar_name, grammar in (("grammar", str(COMMANDS)), ("free speech", "")):
@@ -560,7 +567,7 @@ def main() -> None:
             return
         if arguments.waste:
             print(f"(e) {arguments.engine}: speculation behind the gate, recordings with pauses inside")
-            measure_gate_speculation(engine, arguments.setting, (GAP, SpeechEventConfig.speculation_gap))
+            measure_gate_speculation(engine, arguments.setting, (GAP, SPECULATION_GAP))
             return
         if sets:
             print(f"(a) {arguments.engine}: end of the last word to the text")

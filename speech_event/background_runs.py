@@ -41,7 +41,6 @@ from speech_event.speculation import (
     Speculation,
     SpeculationCounts,
     SpeculationRules,
-    decides_at_end_of_speech,
 )
 from speech_event.turn_taking import RearmingTimer
 
@@ -58,7 +57,8 @@ class UtteranceSoFar:
     grammar: Optional[Grammar]
     origin: TextOrigin  # of a text of it so far
     # With end_of_speech, where the speech so far ends (end_of_turn.py): a speculation is on the
-    # samples up to it, at once, whatever the gap. None: the speaker is still speaking, or off.
+    # samples up to it, at once, whatever the gap. None: the speaker is still speaking, or no
+    # decision on the end of speech is made now (off, or not with this engine and grammar).
     cut: Optional[int] = None
 
 
@@ -184,8 +184,8 @@ class BackgroundRuns:
             return
         if so_far.cut is not None:  # one on other audio is worthless: the cut moved since
             self._speculation.drop(keep=so_far.cut)
-        deciding = so_far.cut is not None and decides_at_end_of_speech(so_far.recognizer, so_far.grammar)
-        if not self._speculation.may_start(so_far.recognizer, self.worker_idle(), deciding):
+        # A cut is offered only where the engine and grammar in force decide (EndOfTurn).
+        if not self._speculation.may_start(so_far.recognizer, self.worker_idle(), so_far.cut is not None):
             return
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = so_far.audio()[: so_far.cut]

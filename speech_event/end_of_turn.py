@@ -24,7 +24,7 @@ from typing import Callable, List, Optional
 
 import numpy as np
 
-from speech_event.config import SpeechEventConfig, ends_at_end_of_speech
+from speech_event.config import SpeechEventConfig, end_of_speech_seconds, ends_at_end_of_speech
 from speech_event.speech_end import SpeechEnds
 
 
@@ -40,18 +40,28 @@ class EndOfTurn:
     """The decisions on the utterance being collected, and the blocks held meanwhile. Every method
     is called under the node's lock."""
 
-    def __init__(self, config: SpeechEventConfig, decides_once: Callable[[], bool] = lambda: False) -> None:
-        """``decides_once``: whether the engine in use is one that cannot be stopped (pocketsphinx),
-        which decides once an utterance. Each decision is a decoding of the whole utterance so far
-        that runs to its end, and under babble an end is heard again and again: deciding each, a
-        rejection came up to 9 s later than at the pause (bench/end_of_speech.py)."""
+    def __init__(
+        self,
+        config: SpeechEventConfig,
+        decides: Callable[[], bool] = lambda: True,
+        decides_once: Callable[[], bool] = lambda: False,
+    ) -> None:
+        """``decides``: whether the engine and grammar in use now decide on the end of speech
+        (speculation.decides_at_end_of_speech); while they do not, no cut is offered and the turn
+        ends at the pause, as with end_of_speech off. ``decides_once``: whether the engine in use
+        is one that cannot be stopped (pocketsphinx), which decides once an utterance. Each
+        decision is a decoding of the whole utterance so far that runs to its end, and under
+        babble an end is heard again and again: deciding each, a rejection came up to 9 s later
+        than at the pause (bench/end_of_speech.py)."""
         self.on = ends_at_end_of_speech(config)
-        self._ends = SpeechEnds(config.sample_rate, config.end_of_speech or config.speech_pause_period)
+        hangover = end_of_speech_seconds(config) or config.speech_pause_period
+        self._ends = SpeechEnds(config.sample_rate, hangover)
         self.deciding: Optional[int] = None  # the cut being decided: samples of the utterance
         self._decided = 0  # the last cut decided on this utterance: no cut is decided twice
         self._held: List[HeldBlock] = []
         self.close_waits = False  # the pause ended while a decision was pending
         self._after_cut = False  # the utterance being collected follows a cut at the end of speech
+        self._decides = decides
         self._decides_once = decides_once
 
     def heard(self, samples: np.ndarray) -> None:
@@ -95,8 +105,9 @@ class EndOfTurn:
         return cut
 
     def _no_more_decisions(self) -> bool:
-        """With an engine that decides once, once a cut of this utterance was decided on (it went on)."""
-        return self._decided > 0 and self._decides_once()
+        """While the engine and grammar in use do not decide; with an engine that decides once,
+        once a cut of this utterance was decided on (it went on)."""
+        return not self._decides() or (self._decided > 0 and self._decides_once())
 
     def decide(self, cut: int) -> None:
         """A speculation on the utterance's first ``cut`` samples decides whether the turn ends."""

@@ -19,7 +19,7 @@ import time
 from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
-from speech_event.config import SpeechEventConfig
+from speech_event.config import SpeechEventConfig, decides_in_free_speech
 from speech_event.end_of_turn import EndOfTurn
 from speech_event.grammar import FREE_SPEECH, Grammar
 from speech_event.health import Health
@@ -116,7 +116,12 @@ class SpeechEventNode:
         self._grammar = starting_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
-        self._end = EndOfTurn(config, lambda: not isinstance(self._recognizer, Stoppable))
+        free_speech = decides_in_free_speech(config)
+        self._end = EndOfTurn(
+            config,
+            lambda: decides_at_end_of_speech(self._recognizer, self._grammar, free_speech),
+            lambda: not isinstance(self._recognizer, Stoppable),
+        )
         self._turn = TurnTaking(
             config,
             clock,
@@ -280,9 +285,9 @@ class SpeechEventNode:
         self._background.speculate()
 
     def _decide(self, cut: Optional[int]) -> None:
-        """Under the lock: a speculation on the utterance up to ``cut`` decides whether the turn
-        ends there (with an engine that cannot be stopped, only with a grammar in force)."""
-        if cut is None or not self._enabled or not decides_at_end_of_speech(self._recognizer, self._grammar):
+        """Under the lock: a speculation on the utterance up to ``cut`` (offered only where the
+        engine and grammar in force decide) decides whether the turn ends there."""
+        if cut is None or not self._enabled:
             return
         self._end.decide(cut)
         complete = self._background.completed_on(cut)

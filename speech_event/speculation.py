@@ -180,15 +180,16 @@ class SpeculationRules:
         return self.current is not None and self.current.adopted is job and self.current.running
 
 
-def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar]) -> bool:
-    """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py): an
-    engine that can be stopped always; one that cannot (pocketsphinx) only with a grammar in
-    force, and once an utterance (EndOfTurn's decides_once). Each decision runs it to its end on the
-    whole utterance so far, and in free speech its text is never a closed sentence (it writes no
-    punctuation), so the turn would end at the pause anyway; its free decoding of a command and a
-    second of babble after it takes 2.1 s, and a decision at each end heard in it kept the text
+def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar], free_speech: bool) -> bool:
+    """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py):
+    with a grammar in force, every engine; in free speech (``free_speech``: end_of_speech set, not
+    left to its default) an engine that can be stopped. One that cannot (pocketsphinx) decides
+    once an utterance (EndOfTurn's decides_once), and never in free speech: each decision runs it
+    to its end on the whole utterance so far, and its text is never a closed sentence (it writes
+    no punctuation), so the turn would end at the pause anyway; its free decoding of a command and
+    a second of babble after it takes 2.1 s, and a decision at each end heard in it kept the text
     up to 15 s late (bench/end_of_speech.py)."""
-    return isinstance(recognizer, Stoppable) or grammar is not None
+    return grammar is not None or (free_speech and isinstance(recognizer, Stoppable))
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:

@@ -17,7 +17,12 @@ import threading
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-from speech_event.config import SpeechEventConfig, ends_at_end_of_speech
+from speech_event.config import (
+    SpeechEventConfig,
+    end_of_speech_seconds,
+    ends_at_end_of_speech,
+    speculation_gap_seconds,
+)
 from speech_event.ports import TIMER_TOLERANCE, Clock, Timer
 
 
@@ -100,8 +105,8 @@ class TurnTaking:
         # start sooner, at speculation_gap, so its text is ready when the end is heard: one timer
         # for each, the gap's only when it comes first.
         self._ends_at_end_of_speech = ends_at_end_of_speech(config)
-        self._silence_seconds = config.end_of_speech if self._ends_at_end_of_speech else math.inf
-        self._gap_seconds = min(config.speculation_gap, self._silence_seconds)
+        self._silence_seconds = end_of_speech_seconds(config) if self._ends_at_end_of_speech else math.inf
+        self._gap_seconds = min(speculation_gap_seconds(config), self._silence_seconds)
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))

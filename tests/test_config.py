@@ -7,12 +7,19 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from speech_event.config import (
+    DECIDING_SPECULATION_GAP,
+    GRAMMAR_END_OF_SPEECH,
+    SPECULATION_GAP,
     ConfigError,
     SpeechEventConfig,
     apply_overrides,
+    decides_in_free_speech,
+    end_of_speech_seconds,
+    ends_at_end_of_speech,
     format_config,
     load_config,
     parse_config,
+    speculation_gap_seconds,
 )
 from tests.helpers.application import run_application
 from tests.helpers.paths import ROOT
@@ -288,3 +295,59 @@ def test_vad_threshold_without_the_silero_model_stops_the_node_saying_how_to_ins
         "vad_threshold needs Silero VAD's ONNX model, shipped in the silero-vad wheel: "
         "pip install --no-deps silero-vad (its torch dependency is not needed)"
     )
+
+
+def test_end_of_speech_left_unset_is_on_where_its_blocks_allow_and_decides_only_with_a_grammar() -> None:
+    unset = parse_config("end_of_speech\nspeculation_gap\n")
+    assert unset == SpeechEventConfig() and unset.end_of_speech is None and unset.speculation_gap is None
+    assert end_of_speech_seconds(unset) == GRAMMAR_END_OF_SPEECH == 0.3
+    assert not decides_in_free_speech(unset)
+    # A block at 8 kHz is 0.51 s: the gaps between blocks would be heard as ends.
+    assert end_of_speech_seconds(parse_config("sample_rate 8000")) == 0.0
+    assert end_of_speech_seconds(parse_config("sample_rate 16000")) == 0.3
+    assert end_of_speech_seconds(parse_config("speech_pause_period 0.3")) == 0.0
+    assert not ends_at_end_of_speech(parse_config("speculative_recognition false"))
+    assert not ends_at_end_of_speech(parse_config("early_pause 0.5"))
+    written = parse_config("end_of_speech 0.4")
+    assert end_of_speech_seconds(written) == 0.4 and decides_in_free_speech(written)
+    off = parse_config("end_of_speech 0")
+    assert end_of_speech_seconds(off) == 0.0 and not ends_at_end_of_speech(off)
+
+
+def test_speculation_gap_left_unset_is_short_where_the_end_of_speech_decides_from_the_start(
+    tmp_path: Path,
+) -> None:
+    grammar = tmp_path / "commands.txt"
+    grammar.write_text("stop\n")
+    assert speculation_gap_seconds(SpeechEventConfig()) == SPECULATION_GAP == 0.3  # free speech
+    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar))) == DECIDING_SPECULATION_GAP == 0.1
+    assert speculation_gap_seconds(SpeechEventConfig(end_of_speech=0.3)) == 0.1
+    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), end_of_speech=0.0)) == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), early_pause=0.5)) == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), speculation_gap=0.2)) == 0.2
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        (
+            "end_of_speech -1",
+            "key 'end_of_speech': value '-1' is out of range; allowed: a number of seconds from 0 (off) to "
+            "60, or nothing for 0.3 in grammar mode and off in free speech",
+        ),
+        (
+            "speculation_gap 0.01",
+            "key 'speculation_gap': value '0.01' is out of range; allowed: a number of seconds from 0.05 to "
+            "60, or nothing for 0.1 where the turn ends at the end of speech and 0.3 elsewhere",
+        ),
+        (
+            "end_of_speech 0.05",
+            "end_of_speech 0.05 s is not longer than one 4096-sample block at sample_rate 48000 Hz (0.085 s): "
+            "the gaps between blocks would be heard as the end of speech; 0 turns it off",
+        ),
+    ],
+)
+def test_end_of_speech_and_speculation_gap_values_name_what_is_allowed(line: str, message: str) -> None:
+    with pytest.raises(ConfigError) as error:
+        parse_config(line, "node.ini")
+    assert message in str(error.value)

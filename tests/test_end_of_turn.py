@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from fixtures.audio import noise, speak_tones
 from harness.memory_runner import run_in_memory
 from harness.scenario import load_scenario
-from speech_event.config import SpeechEventConfig
+from speech_event.config import GRAMMAR_END_OF_SPEECH, SpeechEventConfig, end_of_speech_seconds
 from speech_event.grammar import Grammar
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
@@ -180,7 +180,7 @@ def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_l
     audio = _speech("stop")
     rig = _run(CONFIG, audio, engine=engine)
     last_block = -(-audio.size // BLOCK) * BLOCK / RATE
-    assert _timed(rig) == [(round(last_block + CONFIG.end_of_speech, 6), "stop")]
+    assert _timed(rig) == [(round(last_block + end_of_speech_seconds(CONFIG), 6), "stop")]
 
 
 @pytest.mark.parametrize(
@@ -338,3 +338,68 @@ def test_pocketsphinx_decides_on_the_end_of_speech_in_grammar_mode_once_an_utter
         (pause, "go to the kitchen"),  # "go to" was decided (no phrase): the pause ends it
         (pause, "hello"),  # free speech: pocketsphinx does not decide
     ]
+
+
+# end_of_speech and speculation_gap left to their defaults: on in grammar mode, off in free speech.
+DEFAULT = dataclasses.replace(AT_16K, partial_period=0.0, health_check_period=1.0)
+
+
+@pytest.mark.parametrize("engine", ENGINES, ids=lambda engine: engine.__name__)
+def test_left_to_its_default_the_end_of_speech_ends_the_turn_in_grammar_mode(engine: Engine) -> None:
+    assert DEFAULT.end_of_speech is None and DEFAULT.speculation_gap is None
+    gated = _speech("stop")  # blocks that stop with the speech, as the robot's gate sends them
+    last_block = -(-gated.size // BLOCK) * BLOCK / RATE
+    assert _timed(_run(DEFAULT, gated, engine=engine)) == [
+        (round(last_block + GRAMMAR_END_OF_SPEECH, 6), "stop")
+    ]
+    # The driver's room sound after the speech: the end heard in it, long before the pause.
+    room = _speech("stop", 1.0)
+    ended = _run(DEFAULT, room, engine=engine)
+    assert ended.texts() == ["stop"] and ended.published[0][0] < -(-room.size // BLOCK) * BLOCK / RATE
+
+
+@pytest.mark.parametrize("engine", ENGINES, ids=lambda engine: engine.__name__)
+def test_left_to_its_default_the_end_of_speech_does_not_end_a_turn_in_free_speech(engine: Engine) -> None:
+    # "yes" is a complete answer: with end_of_speech set, the engine that can be stopped ends the turn.
+    audio = _speech("yes", 1.0)
+    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    assert _timed(_run(DEFAULT, audio, grammar="", engine=engine)) == [
+        (round(last_block + DEFAULT.speech_pause_period, 6), "yes")
+    ]
+    if engine is ToneRecognizer:
+        set_to_it = _run(dataclasses.replace(DEFAULT, end_of_speech=GRAMMAR_END_OF_SPEECH), audio, grammar="")
+        assert set_to_it.published[0][0] < last_block
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.lists(st.tuples(st.sampled_from(WORDS), st.floats(0.0, 1.2)), min_size=1, max_size=4),
+    st.floats(0.0, 2.5),
+    st.sampled_from(ENGINES),
+)
+def test_left_to_its_default_free_speech_is_as_with_end_of_speech_off(
+    turns: List[Tuple[str, float]], job_seconds: float, engine: Engine
+) -> None:
+    # The same texts at the same times, and the same speculations: none on the audio up to an end.
+    default = _spoken_with_gaps(DEFAULT, turns, "", job_seconds, engine)
+    off = _spoken_with_gaps(dataclasses.replace(DEFAULT, end_of_speech=0.0), turns, "", job_seconds, engine)
+    assert _timed(default) == _timed(off)
+    assert default.node.speculations.started == off.node.speculations.started
+
+
+def test_left_to_its_default_a_grammar_set_and_cleared_at_run_time_turns_the_end_of_speech_on_and_off() -> (
+    None
+):
+    rig = Rig(DEFAULT, ToneRecognizer())
+    said = _speech("yes", 1.0)
+    turn = -(-said.size // BLOCK) * BLOCK / RATE + DEFAULT.speech_pause_period + 0.5
+    for grammar in ("yes|no", "", "yes|no"):
+        assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
+        start = rig.clock.now()
+        rig.speak(said, BLOCK)
+        rig.clock.advance(turn - (rig.clock.now() - start))
+    after_start = [round(when - start, 6) for (when, _), start in zip(rig.published, (0.0, turn, 2 * turn))]
+    assert rig.texts() == ["yes", "yes", "yes"]
+    last_block = -(-said.size // BLOCK) * BLOCK / RATE
+    assert after_start[0] < last_block and after_start[2] < last_block
+    assert after_start[1] == round(last_block + DEFAULT.speech_pause_period, 6)

@@ -216,7 +216,8 @@ def test_fire_if_over_leaves_an_unarmed_timer_alone() -> None:
 
 # -- TurnTaking -------------------------------------------------------------------------------------
 
-CONFIG = SpeechEventConfig(speech_pause_period=1.5, speculation_gap=0.25, early_pause=0.0)
+# end_of_speech off: the pause alone ends the turn (END_OF_SPEECH turns it on)
+CONFIG = SpeechEventConfig(speech_pause_period=1.5, speculation_gap=0.25, early_pause=0.0, end_of_speech=0.0)
 EARLY = dataclasses.replace(CONFIG, early_pause=0.5)
 NO_SPECULATION = dataclasses.replace(CONFIG, speculative_recognition=False)
 END_OF_SPEECH = dataclasses.replace(CONFIG, speculation_gap=0.125, end_of_speech=0.375)

@@ -10,7 +10,7 @@ from harness.report import report
 from harness.scenario import Say, Scenario, Silence
 from harness.schedule import Due, HealthChecks, Schedule
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
-from speech_event.config import SpeechEventConfig
+from speech_event.config import SpeechEventConfig, speculation_gap_seconds
 from speech_event.interfaces.services import SET_ENABLED_SERVICE
 from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, SetEnabledRequest, String
 
@@ -95,7 +95,7 @@ def test_the_in_memory_run_notes_the_nodes_own_times_its_checks_and_the_utteranc
     last_block = build_timeline(scenario).events[-1].time
     assert outcome.published[0].time == last_block + config.speech_pause_period
     assert last_block + config.speech_pause_period in outcome.node_timers  # the pause ended it
-    assert last_block + config.speculation_gap in outcome.node_timers  # the node speculated
+    assert last_block + speculation_gap_seconds(config) in outcome.node_timers  # the node speculated
     assert config.health_check_period in outcome.node_timers
 
 

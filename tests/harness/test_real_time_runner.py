@@ -69,7 +69,7 @@ def test_what_follows_a_late_answer_comes_after_it_with_the_scenario_silences_ke
             "expect": {"published": ["yes", "no"], "responses": [1]},
         },
         "slow.toml",
-        SpeechEventConfig(),
+        SpeechEventConfig(end_of_speech=0.0),  # each turn ends at the pause, which the times below tell
     )
     rehearsal = Schedule.of(scenario)
     monkeypatch.setattr(Schedule, "of", lambda scenario: rehearsal)
