@@ -83,7 +83,7 @@ class SpeechEventConfig:
     recognition_timeout: float = 30.0
     # Transcribe the utterance so far once no block came for speculation_gap, so its text is
     # ready when the pause ends (speech_event/speculation.py); texts are the same either way.
-    # None: 0.1 s where the turn ends at the end of speech, else 0.3 (speculation_gap_seconds).
+    # None: 0.1 s while the end of speech decides, else 0.3 (speculation_gap_seconds).
     speculative_recognition: bool = True
     speculation_gap: Optional[float] = None
     # Opt-in early end of turn: publish a complete answer this long after the last block instead
@@ -95,7 +95,8 @@ class SpeechEventConfig:
     # follows the speech in the audio (or no block came for this long), the turn ends there if
     # the text up to there is complete; 0: off. It decides by speculating: off without
     # speculative_recognition, and early_pause (the older opt-in) takes its place when set.
-    # None: on (0.3 s) in grammar mode, off in free speech (end_of_speech_seconds).
+    # None: on (0.3 s) in grammar mode with Whisper and NeMo, off in free speech and with
+    # pocketsphinx (end_of_speech_seconds).
     end_of_speech: Optional[float] = None
     # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
     # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
@@ -114,8 +115,8 @@ SOUND_DETECTION_BLOCK = 4096
 # grammar, and 0.3 s met the issue's targets behind the robot's gate (docs/benchmarks.md).
 GRAMMAR_END_OF_SPEECH = 0.3
 # speculation_gap where it is not set: speculating 0.1 s after the last block has the text ready
-# when the end of speech is heard (0.39 s behind the gate against 0.60 s at 0.3); without the end
-# of speech 0.3 s spares the worker about 15 speculations a minute of speech that would be stopped.
+# when the end of speech is heard (0.39 s behind the gate against 0.60 s at 0.3); where the end of
+# speech does not decide, 0.3 s spares the worker about 15 speculations a minute that are stopped.
 DECIDING_SPECULATION_GAP = 0.1
 SPECULATION_GAP = 0.3
 
@@ -123,8 +124,8 @@ SPECULATION_GAP = 0.3
 def end_of_speech_seconds(config: SpeechEventConfig) -> float:
     """end_of_speech as set, or where it is not, GRAMMAR_END_OF_SPEECH if one block is shorter
     (at 8 kHz a block is 0.51 s: the gaps between blocks would be heard as ends), else 0 (off).
-    Left to this default it decides only while a grammar is in force (decides_in_free_speech):
-    one may be set at run time (set_grammar)."""
+    Left to this default it decides only while a grammar is in force (one may be set at run time:
+    set_grammar), with an engine that can be stopped (speculation.decides_at_end_of_speech)."""
     if config.end_of_speech is not None:
         return config.end_of_speech
     block = SOUND_DETECTION_BLOCK / config.sample_rate
@@ -132,10 +133,9 @@ def end_of_speech_seconds(config: SpeechEventConfig) -> float:
     return GRAMMAR_END_OF_SPEECH if fits else 0.0
 
 
-def decides_in_free_speech(config: SpeechEventConfig) -> bool:
-    """Whether the end of speech may end a turn in free speech too: only where end_of_speech is
-    set (behind the robot's gate 0.3 s split 4 of 18 recordings of people reading); left to its
-    default, it ends turns only while a grammar is in force."""
+def end_of_speech_chosen(config: SpeechEventConfig) -> bool:
+    """Whether end_of_speech is set, not left to its default: then it may end a turn in free
+    speech too, and with pocketsphinx (speculation.decides_at_end_of_speech)."""
     return config.end_of_speech is not None
 
 
@@ -144,14 +144,13 @@ def ends_at_end_of_speech(config: SpeechEventConfig) -> bool:
     return end_of_speech_seconds(config) > 0 and config.speculative_recognition and not config.early_pause
 
 
-def speculation_gap_seconds(config: SpeechEventConfig) -> float:
-    """speculation_gap as set, or where it is not, DECIDING_SPECULATION_GAP where the end of
-    speech decides from the start (a grammar in the configuration, or end_of_speech set), else
-    SPECULATION_GAP. A grammar set at run time keeps the gap the node started with."""
+def speculation_gap_seconds(config: SpeechEventConfig, deciding: bool) -> float:
+    """speculation_gap as set, or where it is not, DECIDING_SPECULATION_GAP while the end of speech
+    decides (``deciding``: with the engine and grammar in force, speculation.decides_at_end_of_speech),
+    else SPECULATION_GAP."""
     if config.speculation_gap is not None:
         return config.speculation_gap
-    deciding = ends_at_end_of_speech(config) and (bool(config.grammar) or decides_in_free_speech(config))
-    return DECIDING_SPECULATION_GAP if deciding else SPECULATION_GAP
+    return DECIDING_SPECULATION_GAP if deciding and ends_at_end_of_speech(config) else SPECULATION_GAP
 
 
 def _together(config: SpeechEventConfig) -> Optional[str]:
@@ -170,7 +169,7 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"speech_pause_period {config.speech_pause_period} s is not longer than {one_block}: "
             "speech would be cut between blocks"
         )
-    gap = speculation_gap_seconds(config)
+    gap = speculation_gap_seconds(config, bool(config.grammar) or end_of_speech_chosen(config))
     if config.early_pause and not (
         config.speculative_recognition and gap <= config.early_pause < config.speech_pause_period
     ):
@@ -247,8 +246,8 @@ _FORMAT = KeyValueFormat(
         "partial_period": seconds(0.0, 60.0),
         "end_of_speech": KeyRule(
             optional(number(float, 0.0, 60.0)),
-            "a number of seconds from 0 (off) to 60, or nothing for 0.3 in grammar mode and off in "
-            "free speech",
+            "a number of seconds from 0 (off) to 60, or nothing for 0.3 in grammar mode (Whisper, "
+            "NeMo) and off elsewhere",
         ),
     },
     # The robot's v1.1 spellings.

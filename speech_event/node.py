@@ -19,7 +19,7 @@ import time
 from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
-from speech_event.config import SpeechEventConfig, decides_in_free_speech
+from speech_event.config import SpeechEventConfig, end_of_speech_chosen
 from speech_event.end_of_turn import EndOfTurn
 from speech_event.grammar import FREE_SPEECH, Grammar
 from speech_event.health import Health
@@ -116,12 +116,12 @@ class SpeechEventNode:
         self._grammar = starting_grammar(config, recognizer)
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
-        free_speech = decides_in_free_speech(config)
-        self._end = EndOfTurn(
-            config,
-            lambda: decides_at_end_of_speech(self._recognizer, self._grammar, free_speech),
-            lambda: not isinstance(self._recognizer, Stoppable),
-        )
+        chosen = end_of_speech_chosen(config)
+
+        def deciding() -> bool:  # whether the end of speech decides with the engine and grammar in use
+            return decides_at_end_of_speech(self._recognizer, self._grammar, chosen)
+
+        self._end = EndOfTurn(config, deciding, lambda: not isinstance(self._recognizer, Stoppable))
         self._turn = TurnTaking(
             config,
             clock,
@@ -130,6 +130,7 @@ class SpeechEventNode:
             self._gap_passed,
             self._silence_passed,
             self._speculated,
+            deciding,
         )
         self._watchdog = Watchdog(clock, self._lock, config.recognition_timeout, self._still_running)
         recognition = Recognition(config.sample_rate, screen, stopwatch)

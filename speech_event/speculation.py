@@ -180,16 +180,25 @@ class SpeculationRules:
         return self.current is not None and self.current.adopted is job and self.current.running
 
 
-def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar], free_speech: bool) -> bool:
-    """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py):
-    with a grammar in force, every engine; in free speech (``free_speech``: end_of_speech set, not
-    left to its default) an engine that can be stopped. One that cannot (pocketsphinx) decides
-    once an utterance (EndOfTurn's decides_once), and never in free speech: each decision runs it
-    to its end on the whole utterance so far, and its text is never a closed sentence (it writes
-    no punctuation), so the turn would end at the pause anyway; its free decoding of a command and
-    a second of babble after it takes 2.1 s, and a decision at each end heard in it kept the text
-    up to 15 s late (bench/end_of_speech.py)."""
-    return grammar is not None or (free_speech and isinstance(recognizer, Stoppable))
+def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar], chosen: bool) -> bool:
+    """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py).
+
+    Left to its default (``chosen`` false): with a grammar in force, an engine that can be stopped
+    (Whisper, NeMo). In free speech a pause after a closed sentence would split people's speech
+    (behind the robot's gate 0.3 s split 4 of 18 recordings of people reading), and pocketsphinx's
+    grammar takes a piece of speech cut at a pause for the nearest phrase (people reading "go
+    forward ... ten meters", published "no"; waiting for the pause, nothing).
+    end_of_speech set (``chosen``): with a grammar every engine; in free speech an engine that can
+    be stopped. One that cannot (pocketsphinx) decides once an utterance (EndOfTurn's
+    decides_once), and never in free speech: each decision runs it to its end on the whole
+    utterance so far, and its text is never a closed sentence (it writes no punctuation), so the
+    turn would end at the pause anyway; its free decoding of a command and a second of babble after
+    it takes 2.1 s, and a decision at each end heard in it kept the text up to 15 s late
+    (bench/end_of_speech.py)."""
+    stoppable = isinstance(recognizer, Stoppable)
+    if grammar is not None:
+        return stoppable or chosen
+    return stoppable and chosen
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:

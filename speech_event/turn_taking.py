@@ -92,11 +92,13 @@ class TurnTaking:
         on_gap: Callable[[], None],
         on_silence: Callable[[], None],
         on_speculated: Callable[[int, bool], None],
+        deciding: Callable[[], bool] = lambda: True,
     ) -> None:
         """``on_pause_end`` closes the utterance; ``on_gap`` may speculate; ``on_silence`` (with
         end_of_speech) decides on the end of speech; ``on_speculated`` hears of each speculation on
         the utterance being collected (its samples, whether its text is complete). All four are
-        called under ``lock``."""
+        called under ``lock``. ``deciding``: whether the end of speech decides with the engine and
+        grammar in force now, which the gap left to its default follows."""
         self._config = config
         self._clock = clock
         self._on_speculated = on_speculated
@@ -106,7 +108,7 @@ class TurnTaking:
         # for each, the gap's only when it comes first.
         self._ends_at_end_of_speech = ends_at_end_of_speech(config)
         self._silence_seconds = end_of_speech_seconds(config) if self._ends_at_end_of_speech else math.inf
-        self._gap_seconds = min(speculation_gap_seconds(config), self._silence_seconds)
+        self._deciding = deciding
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
@@ -118,7 +120,7 @@ class TurnTaking:
         self.last_arrival = when
         self._ends_early = False
         self._pause.arm()
-        if self._config.speculative_recognition and self._gap_seconds < self._silence_seconds:
+        if self._config.speculative_recognition and self._gap_seconds() < self._silence_seconds:
             self._gap.arm()
         if self._ends_at_end_of_speech:
             self._silence.arm()
@@ -167,8 +169,11 @@ class TurnTaking:
         pause = self._config.early_pause if self._ends_early else self._config.speech_pause_period
         return self.last_arrival + pause
 
+    def _gap_seconds(self) -> float:
+        return min(speculation_gap_seconds(self._config, self._deciding()), self._silence_seconds)
+
     def _gap_due(self) -> float:
-        return self.last_arrival + self._gap_seconds
+        return self.last_arrival + self._gap_seconds()
 
     def _silence_due(self) -> float:
         return self.last_arrival + self._silence_seconds

@@ -13,7 +13,7 @@ from speech_event.config import (
     ConfigError,
     SpeechEventConfig,
     apply_overrides,
-    decides_in_free_speech,
+    end_of_speech_chosen,
     end_of_speech_seconds,
     ends_at_end_of_speech,
     format_config,
@@ -301,7 +301,7 @@ def test_end_of_speech_left_unset_is_on_where_its_blocks_allow_and_decides_only_
     unset = parse_config("end_of_speech\nspeculation_gap\n")
     assert unset == SpeechEventConfig() and unset.end_of_speech is None and unset.speculation_gap is None
     assert end_of_speech_seconds(unset) == GRAMMAR_END_OF_SPEECH == 0.3
-    assert not decides_in_free_speech(unset)
+    assert not end_of_speech_chosen(unset)
     # A block at 8 kHz is 0.51 s: the gaps between blocks would be heard as ends.
     assert end_of_speech_seconds(parse_config("sample_rate 8000")) == 0.0
     assert end_of_speech_seconds(parse_config("sample_rate 16000")) == 0.3
@@ -309,22 +309,20 @@ def test_end_of_speech_left_unset_is_on_where_its_blocks_allow_and_decides_only_
     assert not ends_at_end_of_speech(parse_config("speculative_recognition false"))
     assert not ends_at_end_of_speech(parse_config("early_pause 0.5"))
     written = parse_config("end_of_speech 0.4")
-    assert end_of_speech_seconds(written) == 0.4 and decides_in_free_speech(written)
+    assert end_of_speech_seconds(written) == 0.4 and end_of_speech_chosen(written)
     off = parse_config("end_of_speech 0")
     assert end_of_speech_seconds(off) == 0.0 and not ends_at_end_of_speech(off)
 
 
-def test_speculation_gap_left_unset_is_short_where_the_end_of_speech_decides_from_the_start(
-    tmp_path: Path,
-) -> None:
-    grammar = tmp_path / "commands.txt"
-    grammar.write_text("stop\n")
-    assert speculation_gap_seconds(SpeechEventConfig()) == SPECULATION_GAP == 0.3  # free speech
-    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar))) == DECIDING_SPECULATION_GAP == 0.1
-    assert speculation_gap_seconds(SpeechEventConfig(end_of_speech=0.3)) == 0.1
-    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), end_of_speech=0.0)) == 0.3
-    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), early_pause=0.5)) == 0.3
-    assert speculation_gap_seconds(SpeechEventConfig(grammar=str(grammar), speculation_gap=0.2)) == 0.2
+def test_speculation_gap_left_unset_is_short_while_the_end_of_speech_decides() -> None:
+    unset = SpeechEventConfig()
+    assert speculation_gap_seconds(unset, deciding=True) == DECIDING_SPECULATION_GAP == 0.1
+    assert speculation_gap_seconds(unset, deciding=False) == SPECULATION_GAP == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(end_of_speech=0.0), deciding=True) == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(early_pause=0.5), deciding=True) == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(speculative_recognition=False), deciding=True) == 0.3
+    assert speculation_gap_seconds(SpeechEventConfig(speculation_gap=0.2), deciding=True) == 0.2
+    assert speculation_gap_seconds(SpeechEventConfig(speculation_gap=0.2), deciding=False) == 0.2
 
 
 @pytest.mark.parametrize(
@@ -333,7 +331,7 @@ def test_speculation_gap_left_unset_is_short_where_the_end_of_speech_decides_fro
         (
             "end_of_speech -1",
             "key 'end_of_speech': value '-1' is out of range; allowed: a number of seconds from 0 (off) to "
-            "60, or nothing for 0.3 in grammar mode and off in free speech",
+            "60, or nothing for 0.3 in grammar mode (Whisper, NeMo) and off elsewhere",
         ),
         (
             "speculation_gap 0.01",

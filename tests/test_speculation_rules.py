@@ -95,17 +95,19 @@ def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the
 
 
 def test_an_engine_that_cannot_be_stopped_decides_on_the_end_of_speech_only_with_a_grammar() -> None:
-    assert decides_at_end_of_speech(StoppableRecognizer(), None, free_speech=True)
-    assert decides_at_end_of_speech(StoppableRecognizer(), COMMANDS, free_speech=True)
-    assert decides_at_end_of_speech(SpyRecognizer(), COMMANDS, free_speech=True)
-    assert not decides_at_end_of_speech(SpyRecognizer(), None, free_speech=True)
+    assert decides_at_end_of_speech(StoppableRecognizer(), None, chosen=True)
+    assert decides_at_end_of_speech(StoppableRecognizer(), COMMANDS, chosen=True)
+    assert decides_at_end_of_speech(SpyRecognizer(), COMMANDS, chosen=True)
+    assert not decides_at_end_of_speech(SpyRecognizer(), None, chosen=True)
 
 
-def test_end_of_speech_left_to_its_default_decides_only_with_a_grammar() -> None:
-    assert decides_at_end_of_speech(StoppableRecognizer(), COMMANDS, free_speech=False)
-    assert decides_at_end_of_speech(SpyRecognizer(), COMMANDS, free_speech=False)
-    assert not decides_at_end_of_speech(StoppableRecognizer(), None, free_speech=False)
-    assert not decides_at_end_of_speech(SpyRecognizer(), None, free_speech=False)
+def test_end_of_speech_left_to_its_default_decides_only_with_a_grammar_and_an_engine_that_can_be_stopped() -> (
+    None
+):
+    assert decides_at_end_of_speech(StoppableRecognizer(), COMMANDS, chosen=False)
+    assert not decides_at_end_of_speech(SpyRecognizer(), COMMANDS, chosen=False)
+    assert not decides_at_end_of_speech(StoppableRecognizer(), None, chosen=False)
+    assert not decides_at_end_of_speech(SpyRecognizer(), None, chosen=False)
 
 
 def test_no_speculation_while_the_worker_is_busy() -> None:

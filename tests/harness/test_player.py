@@ -95,7 +95,9 @@ def test_the_in_memory_run_notes_the_nodes_own_times_its_checks_and_the_utteranc
     last_block = build_timeline(scenario).events[-1].time
     assert outcome.published[0].time == last_block + config.speech_pause_period
     assert last_block + config.speech_pause_period in outcome.node_timers  # the pause ended it
-    assert last_block + speculation_gap_seconds(config) in outcome.node_timers  # the node speculated
+    assert (
+        last_block + speculation_gap_seconds(config, deciding=False) in outcome.node_timers
+    )  # the node speculated
     assert config.health_check_period in outcome.node_timers
 
 
