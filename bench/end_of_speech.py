@@ -1,6 +1,7 @@
 """End of turn at the end of speech (python -m bench.end_of_speech [--engine NAME] [--phrases N]
 [--people] [--roscore] [--setting S]), issue 44: how soon the text comes after the last word, and
-how often speech that goes on is split, with end_of_speech off (today) and on, in one run.
+how often speech that goes on is split, with end_of_speech off (the node before issue 44) and on,
+in one run.
 
 (a) Latency, in memory, in real time (the wall clock, the thread executor, the trained engine):
     festival's slt voice says the robot's commands (harness/data/robot_commands.txt), 48 kHz
@@ -260,8 +261,8 @@ def turned_off(config: SpeechEventConfig) -> SpeechEventConfig:
 
 
 def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, SpeechEventConfig]:
-    """The settings compared: off (today), end_of_speech ``setting`` speculating at the default
-    speculation_gap, and speculating at ``gap`` (0: not measured)."""
+    """The settings compared: ``base`` (turned_off), end_of_speech ``setting`` speculating at its
+    speculation_gap (0.3 s), and speculating at ``gap`` (0: not measured)."""
     on = dataclasses.replace(base, end_of_speech=setting)
     named = {"off": base, f"end_of_speech {setting}": on}
     if gap:

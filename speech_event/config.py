@@ -83,8 +83,8 @@ class SpeechEventConfig:
     recognition_timeout: float = 30.0
     # Transcribe the utterance so far once no block came for speculation_gap, so its text is
     # ready when the pause ends (speech_event/speculation.py); texts are the same either way.
-    # None: 0.1 s while the end of speech decides, else 0.3 (speculation_gap_seconds).
     speculative_recognition: bool = True
+    # None: 0.1 s while the end of speech decides, else 0.3 (speculation_gap_seconds).
     speculation_gap: Optional[float] = None
     # Opt-in early end of turn: publish a complete answer this long after the last block instead
     # of the whole pause; 0: off. Complete: a grammar's phrase, one of complete_answers, or a
@@ -169,7 +169,7 @@ def _together(config: SpeechEventConfig) -> Optional[str]:
             f"speech_pause_period {config.speech_pause_period} s is not longer than {one_block}: "
             "speech would be cut between blocks"
         )
-    gap = speculation_gap_seconds(config, bool(config.grammar) or end_of_speech_chosen(config))
+    gap = speculation_gap_seconds(config, deciding=False)  # early_pause turns the end of speech off
     if config.early_pause and not (
         config.speculative_recognition and gap <= config.early_pause < config.speech_pause_period
     ):

@@ -102,28 +102,32 @@ class TurnTaking:
         self._config = config
         self._clock = clock
         self._on_speculated = on_speculated
-        # With end_of_speech, no block for that long is heard as the end of speech (the robot's
-        # gate sends blocks only while it hears speech). A speculation on the audio up to there may
-        # start sooner, at speculation_gap, so its text is ready when the end is heard: one timer
-        # for each, the gap's only when it comes first.
+        # With end_of_speech, while it decides, no block for that long is heard as the end of
+        # speech (the robot's gate sends blocks only while it hears speech). A speculation on the
+        # audio up to there may start sooner, at speculation_gap, so its text is ready when the end
+        # is heard: one timer for each, the gap's only when it comes first. While it does not
+        # decide, the timers are those of end_of_speech off.
         self._ends_at_end_of_speech = ends_at_end_of_speech(config)
-        self._silence_seconds = end_of_speech_seconds(config) if self._ends_at_end_of_speech else math.inf
+        self._end_of_speech = end_of_speech_seconds(config)
         self._deciding = deciding
         self.last_arrival = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
         self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap)
-        self._silence = RearmingTimer(clock, lock, self._silence_due, on_silence)
+        self._silence = RearmingTimer(clock, lock, self._silence_due, self._silence_heard(on_silence))
 
     def heard(self, when: float) -> None:
         """A block arrived at ``when``: the pause starts again, and the gap."""
         self.last_arrival = when
         self._ends_early = False
         self._pause.arm()
-        if self._config.speculative_recognition and self._gap_seconds() < self._silence_seconds:
+        silence = self._silence_seconds()
+        if self._config.speculative_recognition and self._gap_seconds() < silence:
             self._gap.arm()
-        if self._ends_at_end_of_speech:
+        if silence < math.inf:
             self._silence.arm()
+        else:
+            self._silence.cancel()
 
     def end_pause_if_over(self, arrival: float) -> None:
         """Before a block that arrived at ``arrival`` is taken: if the pause after the latest block
@@ -169,14 +173,25 @@ class TurnTaking:
         pause = self._config.early_pause if self._ends_early else self._config.speech_pause_period
         return self.last_arrival + pause
 
+    def _silence_seconds(self) -> float:
+        """end_of_speech while it decides with the engine and grammar in force; else never."""
+        return self._end_of_speech if self._ends_at_end_of_speech and self._deciding() else math.inf
+
     def _gap_seconds(self) -> float:
-        return min(speculation_gap_seconds(self._config, self._deciding()), self._silence_seconds)
+        return min(speculation_gap_seconds(self._config, self._deciding()), self._silence_seconds())
 
     def _gap_due(self) -> float:
         return self.last_arrival + self._gap_seconds()
 
     def _silence_due(self) -> float:
-        return self.last_arrival + self._silence_seconds
+        return self.last_arrival + self._end_of_speech
+
+    def _silence_heard(self, on_silence: Callable[[], None]) -> Callable[[], None]:
+        def heard() -> None:  # a grammar may have been cleared since the timer was set
+            if self._silence_seconds() < math.inf:
+                on_silence()
+
+        return heard
 
     def _pause_ended(self, close: Callable[[], None]) -> Callable[[], None]:
         def ended() -> None:

@@ -384,15 +384,18 @@ def test_left_to_its_default_the_end_of_speech_does_not_end_a_turn_in_free_speec
     st.floats(0.0, 2.5),
     # Where the default does not decide: free speech, and an engine that cannot be stopped.
     st.sampled_from([("", ToneRecognizer), ("", CannotBeStopped), (COMMANDS, CannotBeStopped)]),
+    # speculation_gap left empty, shorter and longer than end_of_speech's 0.3, and none at all
+    st.sampled_from([None, 0.1, 0.5, 2.0]),
 )
 def test_left_to_its_default_free_speech_and_pocketsphinx_are_as_with_end_of_speech_off(
-    turns: List[Tuple[str, float]], job_seconds: float, mode: Tuple[str, Engine]
+    turns: List[Tuple[str, float]], job_seconds: float, mode: Tuple[str, Engine], gap: Optional[float]
 ) -> None:
     # The same texts at the same times, and the same speculations: none on the audio up to an end.
     grammar, engine = mode
-    default = _spoken_with_gaps(DEFAULT, turns, grammar, job_seconds, engine)
+    config = dataclasses.replace(DEFAULT, speculation_gap=gap)
+    default = _spoken_with_gaps(config, turns, grammar, job_seconds, engine)
     off = _spoken_with_gaps(
-        dataclasses.replace(DEFAULT, end_of_speech=0.0), turns, grammar, job_seconds, engine
+        dataclasses.replace(config, end_of_speech=0.0), turns, grammar, job_seconds, engine
     )
     assert _timed(default) == _timed(off)
     assert default.node.speculations.started == off.node.speculations.started
