@@ -2,6 +2,7 @@
 its timer has not fired when the next block or a service call comes. Where the utterance ends, and
 with which engine, grammar and enabled state it is transcribed, must not depend on that."""
 
+import dataclasses
 from typing import Optional
 
 import numpy as np
@@ -22,7 +23,11 @@ BLOCK = np.full(4096, 0.1, dtype=np.float32)
 class LateTimers(FakeClock):
     def pause_passes(self) -> None:
         """speech_pause_period passes while no timer fires: their thread is late."""
-        self._now += AT_16K.speech_pause_period
+        self.late_by(AT_16K.speech_pause_period)
+
+    def late_by(self, seconds: float) -> None:
+        """``seconds`` pass while no timer fires."""
+        self._now += seconds
 
 
 def _rig(recognizer: Recognizer, engines: Optional[Engines] = None) -> Rig:
@@ -71,3 +76,20 @@ def test_an_utterance_over_before_set_enabled_false_is_transcribed_not_dropped()
     rig.clock.advance(5.0)
     assert [u.size for u in recognizer.utterances] == [4096]
     assert rig.texts() == ["heard"]
+
+
+def test_in_free_speech_a_late_timer_thread_starts_no_speculation_that_end_of_speech_off_would_not() -> None:
+    # end_of_speech left empty does not decide in free speech: no end of speech is heard when a
+    # block comes 0.4 s after the one before while the timers are late (its 0.3 s are over), and
+    # no speculation starts there to be stopped by that block at once.
+    outcomes = []
+    for config in (AT_16K, dataclasses.replace(AT_16K, end_of_speech=0.0)):
+        assert config.grammar == ""
+        rig = Rig(config, ToneRecognizer(), clock=LateTimers())
+        rig.sound_detection.publish(Float32MultiArray(data=speak_tones("yes", 16000)))
+        assert isinstance(rig.clock, LateTimers)
+        rig.clock.late_by(0.4)
+        rig.sound_detection.publish(Float32MultiArray(data=speak_tones("no", 16000)))
+        rig.clock.advance(5.0)
+        outcomes.append((rig.published, rig.node.speculations.started))
+    assert outcomes[0] == outcomes[1]
