@@ -87,6 +87,11 @@ def _run(
     return rig
 
 
+def _last_block(audio: np.ndarray) -> float:
+    """When ``_run`` sends the last block of ``audio`` (its blocks one after the other)."""
+    return -(-audio.size // BLOCK) * BLOCK / RATE
+
+
 def _timed(rig: Rig) -> List[Tuple[float, str]]:
     return [(round(when, 6), text) for when, text in rig.published]
 
@@ -107,7 +112,7 @@ def test_a_command_is_published_when_the_speech_ends_not_after_the_room_sound_an
     heard = speech_ends + int(0.3 * RATE)
     heard_block = -(-heard // BLOCK)
     assert _timed(ended) == [(round(heard_block * BLOCK / RATE, 6), "stop")]
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     assert _timed(waited) == [(round(last_block + CONFIG.speech_pause_period, 6), "stop")]
 
 
@@ -179,7 +184,7 @@ def test_in_free_speech_a_complete_answer_ends_the_turn_and_other_words_wait_for
 def test_blocks_that_stop_with_the_speech_end_the_turn_end_of_speech_after_the_last(engine: Engine) -> None:
     audio = _speech("stop")
     rig = _run(CONFIG, audio, engine=engine)
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     assert _timed(rig) == [(round(last_block + end_of_speech_seconds(CONFIG), 6), "stop")]
 
 
@@ -196,7 +201,7 @@ def test_with_blocks_that_stop_with_the_speech_the_speculation_starts_at_specula
 ) -> None:
     audio = _speech("stop")
     rig = _run(dataclasses.replace(CONFIG, speculation_gap=speculation_gap), audio, job_seconds=job_seconds)
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     assert _timed(rig) == [(round(last_block + after_the_last_block, 6), "stop")]
     assert rig.node.speculations.started == 1  # on the whole utterance, the cut of the decision
 
@@ -309,7 +314,7 @@ def test_an_engine_that_cannot_be_stopped_decides_once_an_utterance() -> None:
     each = _run(CONFIG, audio)
     assert once.texts() == each.texts() == ["go to the kitchen"]
     assert once.node.speculations.started == 1
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     assert _timed(once) == [(round(last_block + CONFIG.speech_pause_period, 6), "go to the kitchen")]
     assert each.published[0][0] < last_block  # inside the room sound after the words
 
@@ -347,19 +352,19 @@ DEFAULT = dataclasses.replace(AT_16K, partial_period=0.0, health_check_period=1.
 def test_left_to_its_default_the_end_of_speech_ends_the_turn_in_grammar_mode() -> None:
     assert DEFAULT.end_of_speech is None and DEFAULT.speculation_gap is None
     gated = _speech("stop")  # blocks that stop with the speech, as the robot's gate sends them
-    last_block = -(-gated.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(gated)
     assert _timed(_run(DEFAULT, gated)) == [(round(last_block + GRAMMAR_END_OF_SPEECH, 6), "stop")]
     # The driver's room sound after the speech: the end heard in it, long before the pause.
     room = _speech("stop", 1.0)
     ended = _run(DEFAULT, room)
-    assert ended.texts() == ["stop"] and ended.published[0][0] < -(-room.size // BLOCK) * BLOCK / RATE
+    assert ended.texts() == ["stop"] and ended.published[0][0] < _last_block(room)
 
 
 def test_left_to_its_default_an_engine_that_cannot_be_stopped_waits_for_the_pause_in_grammar_mode() -> None:
     # pocketsphinx's grammar takes a piece of speech cut at a pause for the nearest phrase: set,
     # end_of_speech decides with it (the tests above); left to its default, it does not.
     for said in (_speech("stop"), _speech("stop", 1.0)):
-        last_block = -(-said.size // BLOCK) * BLOCK / RATE
+        last_block = _last_block(said)
         rig = _run(DEFAULT, said, engine=CannotBeStopped)
         assert _timed(rig) == [(round(last_block + DEFAULT.speech_pause_period, 6), "stop")]
         assert rig.node.speculations.started == 0
@@ -369,7 +374,7 @@ def test_left_to_its_default_an_engine_that_cannot_be_stopped_waits_for_the_paus
 def test_left_to_its_default_the_end_of_speech_does_not_end_a_turn_in_free_speech(engine: Engine) -> None:
     # "yes" is a complete answer: with end_of_speech set, the engine that can be stopped ends the turn.
     audio = _speech("yes", 1.0)
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     assert _timed(_run(DEFAULT, audio, grammar="", engine=engine)) == [
         (round(last_block + DEFAULT.speech_pause_period, 6), "yes")
     ]
@@ -406,7 +411,7 @@ def test_left_to_its_default_a_grammar_set_and_cleared_at_run_time_turns_the_end
 ):
     rig = Rig(DEFAULT, ToneRecognizer())
     said = _speech("yes", 1.0)
-    turn = -(-said.size // BLOCK) * BLOCK / RATE + DEFAULT.speech_pause_period + 0.5
+    turn = _last_block(said) + DEFAULT.speech_pause_period + 0.5
     for grammar in ("yes|no", "", "yes|no"):
         assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(grammar)).response == 1  # type: ignore[attr-defined]
         start = rig.clock.now()
@@ -414,7 +419,7 @@ def test_left_to_its_default_a_grammar_set_and_cleared_at_run_time_turns_the_end
         rig.clock.advance(turn - (rig.clock.now() - start))
     after_start = [round(when - start, 6) for (when, _), start in zip(rig.published, (0.0, turn, 2 * turn))]
     assert rig.texts() == ["yes", "yes", "yes"]
-    last_block = -(-said.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(said)
     assert after_start[0] < last_block and after_start[2] < last_block
     assert after_start[1] == round(last_block + DEFAULT.speech_pause_period, 6)
 
@@ -425,7 +430,7 @@ def test_left_to_its_default_the_speculation_starts_sooner_while_a_grammar_set_a
     # Blocks that stop with the speech, an engine that takes 0.15 s: speculating 0.1 s after the
     # last block, its text is ready when the end is heard (0.3 s); at 0.3 s it would come at 0.45.
     audio = _speech("stop")
-    last_block = -(-audio.size // BLOCK) * BLOCK / RATE
+    last_block = _last_block(audio)
     rig = _run(DEFAULT, audio, job_seconds=0.15)  # the grammar is set by set_grammar
     assert _timed(rig) == [(round(last_block + GRAMMAR_END_OF_SPEECH, 6), "stop")]
     assert rig.node.speculations.started == 1
