@@ -346,13 +346,13 @@ def roscore_latency(
         graph.transport.subscribe(TRANSCRIPT_TOPIC, transcript, on_transcript)
         for speech_set in sets:
             set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
-            base = SpeechEventConfig(
-                end_of_speech=0.0,
-                speculation_gap=SPECULATION_GAP,
-                health_check_period=3600.0,
-                publish_unrecognized=True,
-                quantization=quantization or "none",
-                grammar=_grammar_file(grammar, graph.work),
+            base = turned_off(
+                SpeechEventConfig(
+                    health_check_period=3600.0,
+                    publish_unrecognized=True,
+                    quantization=quantization or "none",
+                    grammar=_grammar_file(grammar, graph.work),
+                )
             )
             for label, setting_config in compared(base, setting, gap).items():
                 name, config = engine_for(recognizer, setting_config)
