@@ -41,6 +41,7 @@ from harness.catalog import engine_for
 from harness.outcome import REAL_TIME, SIM_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.processes import EVENT_TIMEOUT, Processes, ReplayError, free_port, wait_until
+from harness.ros.connections import topics_sent_to
 from harness.ros.stand_in import StandIns
 from harness.scenario import Scenario
 from harness.schedule import (
@@ -358,15 +359,28 @@ class RosReplay:
         node = self._node_name()
         if not any(topic == DIAGNOSTICS_TOPIC and node in names for topic, names in publishers):
             return None
-        # Connected to this node: our subscriber's own count may still hold the last scenario's
-        # node, and a check published before the connection is lost (a replay then waited 20 s for
-        # the check at 5.0 s). The replay is the only subscriber of the node's /diagnostics.
-        uri = self._find_node()
-        wait_until(
-            lambda: bool(self._live_connections(uri, DIAGNOSTICS_TOPIC, published=True)),
-            "the node's /diagnostics",
-        )
         return HealthChecks(float(rospy.get_param(START_TIME_PARAM, 0.0)), period)
+
+    def _wait_until_the_node_sends_to_us(self, node_uri: str) -> None:
+        """Every topic the node under test publishes and the replay hears, connected as the node
+        sees it (harness/ros/connections.py: our own count may also still hold the last
+        scenario's node)."""
+        publishers, subscribers, _ = self._master.getSystemState()
+        node = self._node_name()
+        ours = rospy.get_caller_id()
+        topics = {topic for topic, names in publishers if node in names} & {
+            topic for topic, names in subscribers if ours in names
+        }
+
+        def connected() -> bool:
+            try:
+                return topics <= topics_sent_to(node_uri, ours)
+            except (OSError, xmlrpc.client.Error) as problem:  # the node's host or process gone
+                raise ReplayError(
+                    f"the node under test at {node_uri} did not answer getBusInfo: {problem}"
+                ) from None
+
+        wait_until(connected, f"the node under test to connect {', '.join(sorted(topics))} to the replay")
 
     def _node_ready(self) -> bool:
         try:
@@ -382,12 +396,9 @@ class RosReplay:
             raise ReplayError("no node under test is up")
         return self._live_connections(self._node_uri)
 
-    def _live_connections(
-        self, node_uri: str, topic: str = SIGNAL_TOPIC, published: bool = False
-    ) -> List[Any]:
-        """The node's live connections on ``topic``, as getBusStats gives them: subscribed,
-        [connection id, bytes received, messages received, drop estimate, connected]; published,
-        [connection id, bytes sent, messages sent, connected]."""
+    def _live_connections(self, node_uri: str, topic: str = SIGNAL_TOPIC) -> List[Any]:
+        """The node's live connections on ``topic`` it subscribes to, as getBusStats gives them:
+        [connection id, bytes received, messages received, drop estimate, connected]."""
         proxy = xmlrpc.client.ServerProxy(node_uri)
         try:
             stats: Any = proxy.getBusStats("/speechEventReplay")
@@ -395,8 +406,6 @@ class RosReplay:
             raise ReplayError(
                 f"the node under test at {node_uri} did not answer getBusStats: {problem}"
             ) from None
-        if published:
-            return [c for name, _, connections in stats[2][0] if name == topic for c in connections if c[3]]
         subscriptions = stats[2][1]
         return [c for name, connections in subscriptions if name == topic for c in connections if c[4]]
 
@@ -421,6 +430,7 @@ class RosReplay:
         if any(isinstance(event, SendGoal) for event in timeline.events):
             self._wait_for_the_action_server()
         self._node_uri = self._find_node()
+        self._wait_until_the_node_sends_to_us(self._node_uri)
         self._checks = self._health_checks(scenario.config.health_check_period)
         stand_ins.come_up_first()
         if self._options.real_time:

@@ -13,6 +13,7 @@ import rosgraph
 
 from harness.processes import descendants
 from harness.ros.runner import route_address
+from speech_event import TEXT_TOPIC
 from tests.helpers.paths import ROOT
 from tests.helpers.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
 from tests.ros.conftest import ros_environment
@@ -115,6 +116,45 @@ def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_the_replay_w
     ), result.stdout
     assert lines[-1] == "0 passed, 1 failed"
     assert time.monotonic() - began < 60  # the later waits of a scenario that missed one are short
+
+
+def test_a_text_connection_made_late_loses_no_text(tmp_path: Path) -> None:
+    """On a busy machine the replay's connection to the node's texts was made after the scenario
+    began: the node published "still here" before it and the replay waited for it in vain. Here
+    that connection is made 2 s late, every time: the replay waits for the node to accept it."""
+    late_replay = tmp_path / "late_replay.py"
+    late_replay.write_text(
+        "import sys, time\n"
+        "import rospy.impl.tcpros_pubsub as pubsub\n"
+        "connect = pubsub.robust_connect_subscriber\n"
+        "def late(*arguments):\n"
+        f"    if arguments[-1] == {TEXT_TOPIC!r}:\n"
+        "        time.sleep(2.0)\n"
+        "    connect(*arguments)\n"
+        "pubsub.robust_connect_subscriber = late\n"
+        "from harness.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    environment = _own_roscore_environment(tmp_path)
+    environment["PYTHONPATH"] = str(ROOT)
+    result = subprocess.run(
+        [
+            sys.executable,
+            str(late_replay),
+            "run",
+            "--transport",
+            "ros",
+            "--text-deadline",
+            "10",
+            "scenarios/single_utterance.toml",
+        ],
+        cwd=ROOT,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
 
 
 def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) -> None:
