@@ -13,6 +13,7 @@ from typing import Any, Callable, Dict, Iterator
 import rospy
 
 from harness.processes import Processes, free_port, wait_until
+from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosTransport, master_answers
 from speech_event.messages import Float32MultiArray
@@ -48,8 +49,8 @@ class RosGraph:
         wait_until(lambda: self.signal.connections() == 0, "the node to disconnect")
 
     def subscribed(self, topic: str) -> Callable[[], bool]:
-        """Whether our subscription to ``topic`` has a publisher connected."""
-        return lambda: self.transport._subscribers[topic].get_num_connections() > 0
+        """Whether our subscription to ``topic`` has a publisher connected (as it sees it)."""
+        return lambda: reaches_us(topic)
 
 
 @contextlib.contextmanager

@@ -4,35 +4,18 @@ prints the PASS/FAIL report and exits 0 or 1 (``required="true"`` ends the launc
 
 import argparse
 import time
-import xmlrpc.client
 from typing import List, Optional
 
-import rosgraph
 import rospy
 from std_msgs.msg import String
 
 from harness.outcome import Outcome, Published
 from harness.report import passed, report
-from harness.ros.connections import topics_sent_to
+from harness.ros.connections import reaches_us
 from harness.ros.stand_in import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
 from harness.scenario import add_scenario_arguments, scenario_from_arguments
 from speech_event import TEXT_TOPIC
 from speech_event.application import stop_on_ctrl_c, without_remappings
-
-
-def _texts_reach(texts: rospy.Subscriber) -> bool:
-    """Whether a node publishing the texts has accepted our connection (harness/ros/connections.py:
-    our own count does not say)."""
-    if texts.get_num_connections() == 0:
-        return False  # no publisher yet: no need to ask the master
-    ours = rospy.get_caller_id()
-    master = rosgraph.Master(ours)
-    publishers, _, _ = master.getSystemState()
-    nodes = [node for topic, names in publishers if topic == TEXT_TOPIC for node in names]
-    try:
-        return any(TEXT_TOPIC in topics_sent_to(master.lookupNode(node), ours) for node in nodes)
-    except (OSError, xmlrpc.client.Error, rosgraph.MasterError):  # a node that went away meanwhile
-        return False
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -43,11 +26,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     scenario = scenario_from_arguments(arguments)
     rospy.init_node("speechEventChecker", disable_signals=True)
     published: List[Published] = []
-    texts = rospy.Subscriber(
-        TEXT_TOPIC, String, lambda m: published.append(Published(rospy.get_time(), m.data))
-    )
+    rospy.Subscriber(TEXT_TOPIC, String, lambda m: published.append(Published(rospy.get_time(), m.data)))
     deadline = time.monotonic() + CONNECT_TIMEOUT
-    while not _texts_reach(texts) and time.monotonic() < deadline:
+    while not reaches_us(TEXT_TOPIC) and time.monotonic() < deadline:
         time.sleep(0.005)
     ready = rospy.Publisher(CHECKER_READY_TOPIC, String, queue_size=1, latch=True)
     ready.publish(String(data="listening"))

@@ -8,6 +8,9 @@ replay that took the count for a connection waited 30 s for a text on a busy mac
 import xmlrpc.client
 from typing import Any, Set
 
+import rosgraph
+import rospy
+
 
 def topics_sent_to(node_uri: str, subscriber: str) -> Set[str]:
     """The topics on which the node at ``node_uri`` has an accepted connection to the node named
@@ -20,3 +23,16 @@ def topics_sent_to(node_uri: str, subscriber: str) -> Set[str]:
         for _, destination, direction, _, topic, connected, *_ in connections
         if destination == subscriber and direction == "o" and connected
     }
+
+
+def reaches_us(topic: str) -> bool:
+    """Whether ``topic`` has a publisher and each of them has accepted this node's subscription
+    to it; False also while one cannot be asked (gone meanwhile)."""
+    ours = rospy.get_caller_id()
+    master = rosgraph.Master(ours)
+    try:
+        publishers, _, _ = master.getSystemState()
+        nodes = [node for name, names in publishers if name == topic for node in names]
+        return bool(nodes) and all(topic in topics_sent_to(master.lookupNode(node), ours) for node in nodes)
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterError):
+        return False

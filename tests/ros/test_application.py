@@ -19,6 +19,7 @@ from fixtures.audio import speak_tones
 from fixtures.tones_model import tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from harness.processes import Processes, free_port
+from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
 from tests.helpers.application import APPLICATION
@@ -90,7 +91,7 @@ def test_the_driver_plays_a_wav_file_to_the_node_and_the_text_comes_back(
     subscriber = rospy.Subscriber(TEXT_TOPIC, std_msgs.String, lambda message: texts.append(message.data))
     processes, _ = _start_node(roscore, tmp_path, arguments)
     try:
-        wait_for(lambda: subscriber.get_num_connections() > 0, "the node's text publisher", 60)
+        wait_for(lambda: reaches_us(TEXT_TOPIC), "the node's text publisher", 60)
         driver = subprocess.run(
             [
                 sys.executable,

@@ -22,6 +22,7 @@ from std_msgs import msg as std_msgs
 
 from fixtures.audio import speak_tones
 from harness.processes import Processes
+from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
 from tests.helpers.application import APPLICATION
@@ -148,7 +149,7 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
             msg.recogniseSpeechActionFeedback,
             lambda m: sent.append((m.status.goal_id.id, m.feedback.progress)),
         )
-        wait_for(lambda: feedback.get_num_connections() > 0, "the feedback topic")
+        wait_for(lambda: reaches_us(f"{ACTION}/feedback"), "the feedback topic")
         client.send_goal(msg.recogniseSpeechGoal(wait=5.0), feedback_cb=lambda f: progress.append(f.progress))
         goal_id = client.gh.comm_state_machine.action_goal.goal_id.id
         wait_for(lambda: client.get_state() == GoalStatus.ACTIVE, "the goal to be accepted")
