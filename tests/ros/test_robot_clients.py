@@ -111,6 +111,8 @@ def _action_client(robot_types: Tuple[ModuleType, ModuleType]) -> actionlib.Simp
     # wait_for_server waits for the server's topics, not for the server to hear the client's goal
     # topic: a goal sent before that connection is up is lost (seen under load, 1 run in 5).
     wait_for(lambda: client.action_client.pub_goal.get_num_connections() > 0, "the node to hear our goals")
+    # nor for the node to accept our subscription to its results: one published before is lost
+    wait_for(lambda: reaches_us(f"{ACTION}/result"), "the node's results to reach us")
     return client
 
 
