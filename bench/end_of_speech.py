@@ -22,8 +22,9 @@ in one run.
     its own process (bench/ros_graph.py); a rejection publishes its error there, timed alike.
 (b) Splits, on the fake clock (the engine runs for real; the decisions depend on the audio
     alone): people reading with pauses inside (pocketsphinx-testdata's five cards recordings,
-    five librivox sentences and the three utterances of pocketsphinx's own tests) and festival
-    sentences with commas, each with 0.3 s of room noise (-50 dBFS) before and 1 s after, in free
+    five librivox sentences and the three utterances of pocketsphinx's own tests, read by men; a
+    woman's eight LJ Speech sentences, tests/recordings/ljspeech) and festival sentences with
+    commas, each with 0.3 s of room noise (-50 dBFS) before and 1 s after, in free
     speech: how many recordings give more than one text with end_of_speech on, against off. With
     --grammar, in the robot's command grammar instead: none says a command, so every text
     published is a false command (end_of_speech's default is on in grammar mode).
@@ -60,7 +61,7 @@ import numpy as np
 from bench.grammar import COMMANDS, DIGITS, ENGINES, SPEAKERS, lines
 from fixtures.festival import speak_festival
 from fixtures.noises import at_level, read_audio, rms
-from fixtures.recordings import FSDD, RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, raw_utterance
+from fixtures.recordings import FSDD, RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, ljspeech, raw_utterance
 from harness.catalog import ScenarioEngines, engine_for
 from harness.processes import wait_until
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
@@ -403,10 +404,10 @@ def texts_on_fake_clock(
 
 def paused_speech() -> List[Tuple[str, np.ndarray]]:
     """Speech with pauses inside, at RATE: people reading (the cards, librivox, pocketsphinx's
-    utterances) and festival's sentences with commas."""
+    utterances, LJ Speech) and festival's sentences with commas."""
     speech = [
         (recording.name, resample(recording.samples(), SAMPLE_RATE, RATE))
-        for recording in cards() + librivox()
+        for recording in cards() + librivox() + ljspeech()
     ]
     speech += [(name, resample(raw_utterance(name), SAMPLE_RATE, RATE)) for name in RAW_UTTERANCES]
     return speech + [(sentence, speak_festival(sentence, "slt", RATE)) for sentence in COMMA_SENTENCES]

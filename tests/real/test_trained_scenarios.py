@@ -18,6 +18,7 @@ def test_there_are_scenarios_on_trained_weights_for_free_speech_set_grammar_and_
     assert [path.stem for path in TRAINED_SCENARIOS] == [
         "trained_free_speech",
         "trained_people_words",
+        "trained_woman_reading",
         "trained_yes_no",
     ]
 
