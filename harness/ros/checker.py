@@ -10,6 +10,7 @@ import rospy
 from std_msgs.msg import String
 
 from harness.outcome import Outcome, Published
+from harness.processes import POLL_AT_MOST
 from harness.report import passed, report
 from harness.ros.connections import reaches_us
 from harness.ros.stand_in import CHECKER_READY_TOPIC, CONNECT_TIMEOUT, DONE_TOPIC
@@ -29,7 +30,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     rospy.Subscriber(TEXT_TOPIC, String, lambda m: published.append(Published(rospy.get_time(), m.data)))
     deadline = time.monotonic() + CONNECT_TIMEOUT
     while not reaches_us(TEXT_TOPIC) and time.monotonic() < deadline:
-        time.sleep(0.005)
+        time.sleep(POLL_AT_MOST)  # each poll asks the master and the node, as wait_until's do
     ready = rospy.Publisher(CHECKER_READY_TOPIC, String, queue_size=1, latch=True)
     ready.publish(String(data="listening"))
     rospy.wait_for_message(DONE_TOPIC, String)
