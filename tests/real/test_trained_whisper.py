@@ -15,12 +15,12 @@ import numpy as np
 
 from fixtures import recordings
 from fixtures.festival import festival_voice
-from fixtures.noises import at_level, read_audio
+from fixtures.noises import at_level, read_audio, under
 from fixtures.trained_whisper import tiny_en_directory
 from fixtures.tts import speak_tts
 from speech_event.grammar import load_grammar, phrases_grammar
 from speech_event.pipeline.resample import resample
-from speech_event.recognizers.onnx.grammar_choice import heard_as, spelt
+from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, heard_as, spelt
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.manifest import load_whisper_manifest
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
@@ -221,6 +221,25 @@ def test_women_saying_digits_are_published_in_the_digits_grammar_and_not_as_a_ro
     ]
     engine.use_grammar(load_grammar(ROOT / "harness" / "data" / "robot_commands.txt"))
     assert [engine.transcribe(speech).text for speech in audio] == [""] * len(said)
+
+
+def test_a_word_under_babble_written_near_a_phrase_is_not_published_without_the_audios_evidence(
+    tiny_en: Path,
+) -> None:
+    """Issue 43: a Speech Commands "six" with babble 10 dB under it, written " See you.": "thank you"
+    is one word away and within the threshold, so the words alone published it; the audio made it
+    less probable than with nothing said (-1.2 nats against HEARD_EVIDENCE 2.7): rejected."""
+    name = "439c84f4_nohash_1.wav"
+    six = read_audio(recordings.SPEECH_COMMANDS / "six" / name, 16000)
+    babbled = under(six, "babble", 10.0, 16000, np.random.default_rng(zlib.crc32(name.encode())))
+    engine = WhisperRecognizer(tiny_en, "english")
+    engine.use_grammar(load_grammar(ROOT / "harness" / "data" / "robot_commands.txt"))
+    transcript = engine.transcribe(in_the_room(babbled, name))
+    choice = engine.last_choice
+    assert choice is not None
+    assert (transcript.text, transcript.rejected) == ("", "thank you")
+    assert choice.taken_by_the_words(NEURAL_GRAMMAR_THRESHOLD) == "thank you"  # " See you."
+    assert choice.evidence["thank you"] < 0
 
 
 def in_the_room(speech: np.ndarray, seed_name: str) -> np.ndarray:

@@ -388,6 +388,28 @@ def test_a_free_text_that_is_a_phrase_needs_the_audios_evidence_where_the_engine
     assert GrammarChoice(" Thanks.", -4.3, scores).free_phrase is None
 
 
+def test_a_phrase_the_free_text_is_a_mishearing_of_needs_the_audios_evidence_too() -> None:
+    """Issue 43, trained tiny.en int8 through the node: a "six" of Speech Commands under babble at
+    10 dB written " See you.", "thank you" one word away and 0.8 nats less likely, with -0.4
+    evidence; base fp32 wrote lucas's "zero" with 1 s of room noise so. Said commands misheard had
+    +7.0 and more (george's "two" written " to", "pick up the ball" as " Pick up the model.")."""
+    scores = {"thank you": -4.95, "yes": -8.83, "no": -9.01}
+    see_you = GrammarChoice(" See you.", -4.12, scores, {"thank you": -0.41})
+    assert see_you.taken_by_the_words(-5.0) == "thank you"
+    assert see_you.transcript(-5.0) == Transcript("", rejected="thank you")
+    assert GrammarChoice(" See you.", -4.12, scores, {"thank you": 2.7}).transcript(-5.0) == Transcript(
+        "thank you"
+    )
+    # no evidence given (the NeMo engines): the words decide
+    assert GrammarChoice(" See you.", -4.12, scores).transcript(-5.0) == Transcript("thank you")
+    two = GrammarChoice(" to", -6.0, {"two": -7.2, "ten": -15.0}, {"two": 6.99})
+    assert two.taken_by_the_words(-5.0) == "two"
+    assert two.transcript(-5.0) == Transcript("two")
+    # the words take nothing: other speech, or a phrase beyond the threshold
+    assert GrammarChoice(" Bye.", -5.1, scores).taken_by_the_words(-5.0) is None
+    assert GrammarChoice(" See you.", -4.12, {"thank you": -9.2}).taken_by_the_words(-5.0) is None
+
+
 def test_a_one_word_phrase_written_as_a_word_pronounced_the_same_is_taken_within_the_threshold() -> None:
     """Issue 43, base int8 on george's four: written " for", 2.9 nats more likely than "four"."""
     digits = {"four": -12.9, "five": -13.7, "two": -20.0}

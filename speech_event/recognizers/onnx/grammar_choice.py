@@ -19,9 +19,11 @@ published on its evidence (base int8 wrote a spoken "stop" under babble as " Stu
 nats above it with +7.9, "stand up" 0.2 below with +8.9). Anything else is rejected, the most likely
 phrase named.
 
-A free text that is a phrase is taken only if the audio's evidence for it is at least
-HEARD_EVIDENCE, where the engine can score it unheard: Whisper writes the text it expects with
-nothing said (" Thank you.") for sound it cannot make out, babble under a word.
+A phrase the words take (the free text, or the phrase it is a mishearing of) is taken only if the
+audio's evidence for it is at least HEARD_EVIDENCE, where the engine can score it unheard: Whisper
+writes the text it expects with nothing said (" Thank you.") for sound it cannot make out, babble
+under a word, and words near it (" See you." for a "six" under babble: "thank you" one word
+away).
 
 Why the one-word way (issue 43, recordings of people saying digits and single command words):
 people's short words are often written as another word ("Bye!" for five, " full" for four, " Dump."
@@ -151,8 +153,9 @@ class GrammarChoice:
     # log-probability of each phrase (its best form); an engine may give, for a phrase below
     # ``least_deciding_score`` and below the best phrase, an upper bound of it instead
     phrase_scores: Dict[str, float]
-    # For the phrases ``evidence_candidates`` names, when the engine can score a phrase with nothing
-    # said (Whisper): log P(phrase | audio) - log P(phrase | silence), its best form's.
+    # For the phrase ``taken_by_the_words``, or else those ``evidence_candidates`` names, when the
+    # engine can score a phrase with nothing said (Whisper): log P(phrase | audio) - log P(phrase |
+    # silence), its best form's.
     evidence: Mapping[str, float] = field(default_factory=dict)
 
     def ratio(self, phrase: str) -> float:
@@ -185,20 +188,26 @@ class GrammarChoice:
         said = spelt(self.free_text)
         return said if said in self.phrase_scores else None
 
-    def transcript(self, threshold: float, confidence: Optional[float] = None) -> Transcript:
-        """The phrase said, or no text naming the most likely phrase as rejected."""
+    def taken_by_the_words(self, threshold: float) -> Optional[str]:
+        """The phrase the free text's words name: the free text itself, or the most probable
+        phrase it is a mishearing of at least ``threshold``; None when they name none."""
+        if self.free_phrase is not None:
+            return self.free_phrase
         said = spelt(self.free_text)
-        if said in self.phrase_scores:
-            if self.evidence.get(said, math.inf) < HEARD_EVIDENCE:
-                return Transcript("", rejected=said)  # what the model writes for unclear sound
-            return Transcript(said, confidence)
         misheard = [
             phrase
             for phrase in self.phrase_scores
             if self.ratio(phrase) >= threshold and heard_as(said, phrase)
         ]
-        if misheard:
-            return Transcript(max(misheard, key=self.phrase_scores.__getitem__), confidence)
+        return max(misheard, key=self.phrase_scores.__getitem__) if misheard else None
+
+    def transcript(self, threshold: float, confidence: Optional[float] = None) -> Transcript:
+        """The phrase said, or no text naming the most likely phrase as rejected."""
+        taken = self.taken_by_the_words(threshold)
+        if taken is not None:
+            if self.evidence.get(taken, math.inf) < HEARD_EVIDENCE:
+                return Transcript("", rejected=taken)  # what the model writes for unclear sound
+            return Transcript(taken, confidence)
         candidates = self.evidence_candidates(threshold)
         if candidates:  # the most probable only: never a phrase the model finds less probable
             best = max(candidates, key=self.phrase_scores.__getitem__)

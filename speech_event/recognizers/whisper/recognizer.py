@@ -10,9 +10,10 @@ With a grammar in force: the free greedy decoding, then each phrase that can dec
 teacher forcing (forced.py; the others bounded by their first token) in the forms Whisper writes
 it (written_forms.py: its usual ones, and for a phrase the free text may be a mishearing of, the
 phrase in the free text's punctuation), each form in the tokens Whisper's tokenizer gives it
-(tokenizer.py); the free text when it is a phrase, else the phrases evidence_candidates names,
-scored against silence too (forced.UnheardScores: the audio's evidence for them); the answer
-chosen as onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
+(tokenizer.py); the phrase the free text's words take (the free text, or the phrase it is a
+mishearing of), else the phrases evidence_candidates names, scored against silence too
+(forced.UnheardScores: the audio's evidence for them); the answer chosen as
+onnx/grammar_choice.py says. A command fits in Whisper's 30 s window: only the first
 piece is decoded then.
 """
 
@@ -188,14 +189,13 @@ class WhisperRecognizer:
                 best[phrase] = score, tokens
         choice = GrammarChoice(free_text, free.score, {phrase: score for phrase, (score, _) in best.items()})
         confidence = None if free.no_speech_prob is None else 1.0 - free.no_speech_prob
-        if choice.free_phrase is not None:  # taken only on the audio's evidence for it
-            choice = self._with_evidence(choice, best, [choice.free_phrase], run)
-        answer = choice.transcript(self._threshold, confidence)
-        if not answer.text and choice.free_phrase is None:  # the words took no phrase: the evidence may
-            choice = self._with_evidence(choice, best, choice.evidence_candidates(self._threshold), run)
-            answer = choice.transcript(self._threshold, confidence)
+        # A phrase the words take is taken only on the audio's evidence for it; where they take
+        # none, the evidence may take a candidate.
+        taken = choice.taken_by_the_words(self._threshold)
+        unheard = [taken] if taken is not None else choice.evidence_candidates(self._threshold)
+        choice = self._with_evidence(choice, best, unheard, run)
         self._last_choice = choice
-        return answer
+        return choice.transcript(self._threshold, confidence)
 
     def _with_evidence(
         self,
