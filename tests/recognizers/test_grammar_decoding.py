@@ -392,7 +392,8 @@ def test_a_phrase_the_free_text_is_a_mishearing_of_needs_the_audios_evidence_too
     """Issue 43, trained tiny.en int8 through the node: a "six" of Speech Commands under babble at
     10 dB written " See you.", "thank you" one word away and 0.8 nats less likely, with -0.4
     evidence; base fp32 wrote lucas's "zero" with 1 s of room noise so. Said commands misheard had
-    +7.0 and more (george's "two" written " to", "pick up the ball" as " Pick up the model.")."""
+    +5.7 and more (base fp32, george's four written " for"; tiny.en int8, his "two" written " to"
+    +7.0)."""
     scores = {"thank you": -4.95, "yes": -8.83, "no": -9.01}
     see_you = GrammarChoice(" See you.", -4.12, scores, {"thank you": -0.41})
     assert see_you.taken_by_the_words(-5.0) == "thank you"

@@ -74,11 +74,13 @@ PREFERRED_SLACK = -0.5
 # The least evidence (nats) for such a phrase: the commands it took through the node +8.3 and more,
 # other speech within the slack at most +6.0.
 EVIDENCE_THRESHOLD = 8.0
-# The least evidence for a phrase that is the free text itself, where the engine can score it
-# unheard (Whisper), between what sound the model could not make out gave and what the phrase said
-# gave: tiny.en int8 wrote " Thank you." for babble 10 dB under a spoken "bird" (+0.1), base int8
-# for jackson's "two" alone (+2.1); "thank you" said in espeak's and festival's voices had +3.3 to
-# +3.7 (base int8) and +3.6 to +4.0 (tiny.en int8), every other command said +5.6 and more.
+# The least evidence for a phrase the words take (the free text itself, or a phrase it is a mishearing
+# of: " See you." for a "six" under babble, "thank you" at -0.4; misheard ones said +5.7 and more),
+# where the engine can score it unheard (Whisper), between what sound the model could not make out
+# gave and what the phrase said gave: tiny.en int8 wrote " Thank you." for babble 10 dB under a spoken
+# "bird" (+0.1), base int8 for jackson's "two" alone (+2.1); "thank you" said in espeak's and
+# festival's voices had +3.3 to +3.7 (base int8) and +3.6 to +4.0 (tiny.en int8), every other command
+# said +5.6 and more.
 HEARD_EVIDENCE = 2.7
 # The least evidence for a one-word phrase a one-word free text may be (issue 43, people's digits
 # and command words through the node, 0 to 1 s of room noise, pink and babble 10 dB under them):
