@@ -395,7 +395,7 @@ class SpeechEventNode:
         is the robot's own voice); enabled again, the node starts clean. Health checks go on, and
         recognitions already handed over still publish."""
         with self._lock:
-            self._turn.end_pause_if_over(self._clock.now())  # an utterance already over is no robot's voice
+            self._end_turn_if_over()  # an utterance already over is no robot's voice
             changed = enabled != self._enabled
             self._enabled = enabled
             if not enabled:
@@ -413,7 +413,7 @@ class SpeechEventNode:
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         with self._lock:  # utterances closed before this finish with the old engine
-            self._turn.end_pause_if_over(self._clock.now())
+            self._end_turn_if_over()
             self._background.drop()
             self._undecided()
             self._language, self._recognizer = language, recognizer
@@ -421,11 +421,24 @@ class SpeechEventNode:
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
         with self._lock:  # utterances closed before this finish with the old grammar
-            self._turn.end_pause_if_over(self._clock.now())
+            self._end_turn_if_over()
             self._background.drop()
             self._undecided()
             self._grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)
+
+    def _end_turn_if_over(self) -> None:
+        """Under the lock, before a call changes the engine, the grammar or the enabled flag: an
+        utterance whose pause is over by now ends first, with what was in force while it was said.
+        Also while a decision on its end of speech is still pending, which a slow engine or a busy
+        machine leaves pending past the pause: the decision is dropped and the whole utterance
+        transcribed, so how long the engine takes never decides what a call applies to."""
+        now = self._clock.now()
+        self._turn.end_pause_if_over(now)
+        if self._end.close_waits:
+            self._background.drop()
+            self._undecided()
+            self._turn.end_pause_if_over(now)
 
     def _in_force(self) -> Tuple[str, Recognizer, Optional[Grammar]]:
         """The language, engine and grammar in use now."""

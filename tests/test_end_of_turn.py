@@ -18,8 +18,8 @@ from harness.scenario import load_scenario
 from speech_event.config import GRAMMAR_END_OF_SPEECH, SpeechEventConfig, end_of_speech_seconds
 from speech_event.grammar import Grammar
 from speech_event.interfaces.diagnostics import DISCARDED_AFTER_SPEECH
-from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
-from speech_event.messages import SetGrammarRequest
+from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE
+from speech_event.messages import SetEnabledRequest, SetGrammarRequest
 from speech_event.ports import Recognizer, Stoppable, Transcript
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.speech_end import AVERAGED_FRAMES
@@ -434,3 +434,37 @@ def test_left_to_its_default_the_speculation_starts_sooner_while_a_grammar_set_a
     rig = _run(DEFAULT, audio, job_seconds=0.15)  # the grammar is set by set_grammar
     assert _timed(rig) == [(round(last_block + GRAMMAR_END_OF_SPEECH, 6), "stop")]
     assert rig.node.speculations.started == 1
+
+
+SLOW = 3.0  # seconds an engine takes to decide: longer than the pause (a slow or busy machine)
+
+
+@pytest.mark.parametrize("job_seconds", [0.0, SLOW])
+def test_a_call_after_the_pause_applies_to_the_next_utterance_however_long_the_decision_takes(
+    job_seconds: float,
+) -> None:
+    # The robot's controller clears the grammar once the answer's pause is over. With a fast
+    # engine the end of speech decided 'maybe' long before; with a slow one the decision was still
+    # pending at the call, and the utterance once ended after it, in free speech: 'maybe' published.
+    audio = _speech("maybe")
+    rig = Rig(DEFAULT, ToneRecognizer(), job_seconds=job_seconds)
+    assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest("yes|no")).response == 1  # type: ignore[attr-defined]
+    rig.speak(audio, BLOCK)
+    rig.clock.advance(DEFAULT.speech_pause_period + 0.5)
+    assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest("")).response == 1  # type: ignore[attr-defined]
+    rig.speak(_speech("thank you"), BLOCK)
+    rig.clock.advance(DEFAULT.speech_pause_period + 4 * SLOW)
+    assert rig.texts() == ["thank you"]
+
+
+@pytest.mark.parametrize("job_seconds", [0.0, SLOW])
+def test_an_answer_whose_pause_is_over_is_published_though_the_node_is_disabled_before_its_decision(
+    job_seconds: float,
+) -> None:
+    rig = Rig(DEFAULT, ToneRecognizer(), job_seconds=job_seconds)
+    assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest("yes|no")).response == 1  # type: ignore[attr-defined]
+    rig.speak(_speech("yes"), BLOCK)
+    rig.clock.advance(DEFAULT.speech_pause_period + 0.5)
+    assert rig.bus.call(SET_ENABLED_SERVICE, SetEnabledRequest("false")).response == 1  # type: ignore[attr-defined]
+    rig.clock.advance(DEFAULT.speech_pause_period + 4 * SLOW)
+    assert rig.texts() == ["yes"]
