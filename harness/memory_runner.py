@@ -6,7 +6,7 @@ from typing import Callable, List, Optional
 from harness.catalog import ScenarioEngines
 from harness.outcome import Outcome, Published, result_text
 from harness.player import play
-from harness.scenario import Scenario
+from harness.scenario import Scenario, ScenarioError
 from harness.timeline import build_timeline
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -16,9 +16,12 @@ from speech_event.interfaces.action import ACTION_NAME
 from speech_event.messages import Float32MultiArray, RecogniseSpeechGoal, String, TranscriptMessage
 from speech_event.node import SpeechEventNode
 from speech_event.ports import Timer
-from speech_event.topics import PARTIAL_TOPIC, TRANSCRIPT_TOPIC
+from speech_event.topics import PARTIAL_TOPIC, SOUND_DETECTION_DOWN, TRANSCRIPT_TOPIC
 
 SOUND_DETECTION = "soundDetection"
+# The most scenario time a call waits for a text when recognition takes time (run_in_memory's
+# recognition_seconds): a minute of an engine's work and more.
+LONGEST_TEXT_WAIT = 60.0
 
 
 class _NodeClock:
@@ -71,11 +74,15 @@ class _InMemory:
     """The scenario's time is the fake clock's; the robot's clients call the node on the bus, and
     what the node publishes there is collected."""
 
-    def __init__(self, bus: InMemoryBus, clock: FakeClock) -> None:
+    def __init__(self, bus: InMemoryBus, clock: FakeClock, recognition_seconds: float) -> None:
         self.bus = bus
         self._clock = clock
+        self._instant = recognition_seconds == 0.0
+        # How long calls waited for a text: the events after them come that much later.
+        self._waited = 0.0
         self.outcome = Outcome()
         self._played = 0
+        self._texts_at_last_call = 0  # utterances' texts published before the last call or goal
         bus.subscribe(TEXT_TOPIC, String, self._on_text)
         bus.subscribe(PARTIAL_TOPIC, String, self._on_partial)
         bus.subscribe(TRANSCRIPT_TOPIC, TranscriptMessage, self._on_transcript)
@@ -99,17 +106,38 @@ class _InMemory:
         self.outcome.results.append(Published(self._clock.now(), text, self._played))
 
     def advance_to(self, when: float) -> None:
-        self._clock.advance_to(when)
+        self._clock.advance_to(when + self._waited)
 
     def settle(self, played: int, final: bool) -> None:
         self._played = played
         self._clock.advance_to(self._clock.now())  # the timers set at this time by the last event
 
     def call(self, service: str, request: object) -> None:
+        self._texts_at_last_call = self._texts()
         self.outcome.responses.append(int(self.bus.call(service, request).response))  # type: ignore[attr-defined]
 
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
+        self._texts_at_last_call = self._texts()
         self.bus.send_goal(ACTION_NAME, goal)
+
+    def wait_for_text(self, played: int) -> None:
+        """The clock moves on, timer by timer, until a text has come since the last call or goal.
+        Where recognition takes no time (the scenario as written, and the rehearsal a replay on a
+        real clock follows) it must have come by the call's time."""
+        asked_at = self._clock.now()
+        while self._texts() == self._texts_at_last_call:
+            due = self._clock.next_due()
+            if self._instant or due is None or due > asked_at + LONGEST_TEXT_WAIT:
+                raise ScenarioError(
+                    f"the call at t={asked_at:.3f} s waits for the text of the utterance before it "
+                    '(after = "text"), but the node published none by then since the last call or '
+                    'goal; after = "text" is allowed only where that text comes before the call'
+                )
+            self._clock.advance_to(due)
+        self._waited += self._clock.now() - asked_at
+
+    def _texts(self) -> int:
+        return sum(item.text != SOUND_DETECTION_DOWN for item in self.outcome.published)
 
 
 def run_in_memory(
@@ -126,7 +154,7 @@ def run_in_memory(
     """
     timeline = build_timeline(scenario)
     clock = clock or FakeClock()
-    runner = _InMemory(bus or InMemoryBus(), clock)
+    runner = _InMemory(bus or InMemoryBus(), clock, recognition_seconds)
     sound_detection = SoundDetectionOnTheBus(runner.bus)
     node_clock = _NodeClock(clock, runner.outcome.node_timers)
     executor = ClockExecutor(node_clock, recognition_seconds)
@@ -136,7 +164,7 @@ def run_in_memory(
         )
         node.start()
         play(timeline, runner, sound_detection)
-        clock.advance_to(max(timeline.end, executor.free_at))  # recognitions still running finish
+        clock.advance_to(max(clock.now(), executor.free_at))  # recognitions still running finish
         node.stop()
         node.flush_storage()
     return runner.outcome

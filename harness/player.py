@@ -3,7 +3,9 @@ roscore (harness/ros/runner.py).
 
 The walk decides the order: it stops at each time at which an event happens, at each of the
 runner's ``stops`` and at the timeline's end, moves the runner's clock there, then plays that
-time's events in timeline order, letting the node settle before each and after the last. A runner
+time's events in timeline order, letting the node settle before each and after the last. A client's
+call that waits for a text (as the Behaviour Controller waits for the answer before it goes on) is
+made once it has come: causality, not a margin of silence, orders it after the utterance. A runner
 says only how its clock moves, how soundDetection does what the timeline says, and how the robot's
 clients call the node.
 """
@@ -48,6 +50,12 @@ class Player(Protocol):
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
         """Send the node an action goal (the runner keeps its result)."""
 
+    def wait_for_text(self, played: int) -> None:
+        """Before a call or goal that waits for the text of the utterance before it (``after =
+        "text"``), ``played`` events in: in memory, check that the node has published a text since
+        the last call or goal; on a real clock, wait for what it had published by then in memory
+        (the events after it move later by the wait, as after a late answer)."""
+
 
 def play(
     timeline: Timeline, player: Player, sound_detection: SoundDetection, stops: Iterable[float] = ()
@@ -62,6 +70,8 @@ def play(
         player.advance_to(when)
         for index, event in events_at.get(when, []):
             player.settle(played, final=False)
+            if isinstance(event, (CallService, SendGoal)) and event.after_text:
+                player.wait_for_text(played)
             _play_one(player, sound_detection, index, event)
             played = index + 1
         player.settle(played, final=when == times[-1])

@@ -69,8 +69,14 @@ class _RealTime:
 
     def settle(self, played: int, final: bool) -> None:
         """Only at the end: waiting before an event would shift the events after it."""
-        if not final:
-            return
+        if final:
+            self._wait_for_due(played)
+
+    def wait_for_text(self, played: int) -> None:
+        """The call waits; the call's answer then moves the events after it (ScenarioWallClock)."""
+        self._wait_for_due(played)
+
+    def _wait_for_due(self, played: int) -> None:
         # partial texts are not collected: when one comes decides what it has heard
         due = dataclasses.replace(self._schedule.due(self._now, played), partials=())
         gave_up = due.wait(self.outcome, self._text_deadline, self._scenario_time)

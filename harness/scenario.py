@@ -23,6 +23,9 @@ else:  # pragma: no cover - the robot's Python
 
 MALFORMED_KINDS = ("empty", "nan", "inf", "out_of_range", "multichannel", "oversized", "wrong_type")
 OUTAGE_KINDS = ("shutdown", "crash")
+# What a client's call may wait for (`after`): "text", the text of the utterance before it, as the
+# Behaviour Controller sets its next grammar or disables the node only once the answer has come.
+AFTER = ("text",)
 DEFAULT_NOISE_DB = -40.0
 
 
@@ -81,6 +84,7 @@ class Enable:
     """A set_enabled call with this exact request string; takes no scenario time."""
 
     request: str
+    after_text: bool = False  # made once the text of the utterance before it has come
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,7 @@ class Language:
     """A set_language call with this exact request string; takes no scenario time."""
 
     request: str
+    after_text: bool = False  # made once the text of the utterance before it has come
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,7 @@ class SetGrammar:
     for free speech); takes no scenario time."""
 
     request: str
+    after_text: bool = False  # made once the text of the utterance before it has come
 
 
 @dataclass(frozen=True)
@@ -103,6 +109,7 @@ class Listen:
     """A recognise_speech goal with this wait; takes no scenario time (later steps run meanwhile)."""
 
     wait: float
+    after_text: bool = False  # sent once the text of the utterance before it has come
 
 
 Step = Union[Say, Play, Silence, Noise, Malformed, Outage, Enable, Language, SetGrammar, Listen]
@@ -170,10 +177,10 @@ _STEP_KEYS = {
     "noise": ("noise", "level_db", "kind"),
     "malformed": ("malformed",),
     "outage": ("outage", "kind"),
-    "enable": ("enable",),
-    "language": ("language",),
-    "grammar": ("grammar",),
-    "listen": ("listen",),
+    "enable": ("enable", "after"),
+    "language": ("language", "after"),
+    "grammar": ("grammar", "after"),
+    "listen": ("listen", "after"),
 }
 
 
@@ -260,14 +267,15 @@ def _step(table: Any, where: str) -> Step:
         return Noise(reader.seconds("noise"), level_db, _noise_kind(reader, "kind", "white"))
     if kind == "malformed":
         return Malformed(reader.choice("malformed", MALFORMED_KINDS))
+    after_text = reader.has("after") and reader.choice("after", AFTER) == "text"
     if kind == "enable":
-        return Enable(reader.get("enable", str))
+        return Enable(reader.get("enable", str), after_text)
     if kind == "language":
-        return Language(reader.get("language", str))
+        return Language(reader.get("language", str), after_text)
     if kind == "grammar":
-        return SetGrammar(reader.get("grammar", str))
+        return SetGrammar(reader.get("grammar", str), after_text)
     if kind == "listen":
-        return Listen(reader.seconds("listen", allow_zero=True))
+        return Listen(reader.seconds("listen", allow_zero=True), after_text)
     return Outage(reader.seconds("outage"), reader.choice("kind", OUTAGE_KINDS, "shutdown"))
 
 
@@ -379,7 +387,7 @@ def _next_to(step: Step, source: str) -> Step:
     a recording, a noise file."""
     folder = Path(source).parent
     if isinstance(step, SetGrammar) and "|" not in step.request and (folder / step.request).is_file():
-        return SetGrammar(str(folder / step.request))
+        return dataclasses.replace(step, request=str(folder / step.request))
     if isinstance(step, Play):
         path = _file_next_to(step.path, folder, source, "play")
         return dataclasses.replace(step, path=path, noise=_noise_next_to(step.noise, folder, source))

@@ -3,7 +3,9 @@
 Both transports play the same timeline, so a scenario means the same thing in memory and on ROS.
 soundDetection publishes 4096-sample blocks, each when it has been recorded (paced in real time);
 it is up at t = 0 and stays up and silent after the last step until the node's pause has passed
-(and every action goal's wait). Service calls and action goals take no scenario time.
+(and every action goal's wait). Service calls and action goals take no scenario time; one that
+waits for a text (``after_text``) is made at its time in memory, where the text must have come by
+then, and later on a real clock if the text comes later (harness/player.py).
 """
 
 from dataclasses import dataclass
@@ -64,12 +66,14 @@ class CallService:
     time: float
     service: str  # SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE or SET_GRAMMAR_SERVICE
     request: object
+    after_text: bool = False  # made once the text of the utterance before it has come
 
 
 @dataclass(frozen=True)
 class SendGoal:
     time: float
     goal: RecogniseSpeechGoal
+    after_text: bool = False
 
 
 Event = Union[Publish, GoDown, ComeUp, CallService, SendGoal]
@@ -137,13 +141,16 @@ def build_timeline(scenario: Scenario) -> Timeline:
             time += step.seconds
             events.append(ComeUp(time))
         elif isinstance(step, Enable):
-            events.append(CallService(time, SET_ENABLED_SERVICE, SetEnabledRequest(step.request)))
+            request: object = SetEnabledRequest(step.request)
+            events.append(CallService(time, SET_ENABLED_SERVICE, request, step.after_text))
         elif isinstance(step, Language):
-            events.append(CallService(time, SET_LANGUAGE_SERVICE, SetLanguageRequest(step.request)))
+            request = SetLanguageRequest(step.request)
+            events.append(CallService(time, SET_LANGUAGE_SERVICE, request, step.after_text))
         elif isinstance(step, SetGrammar):
-            events.append(CallService(time, SET_GRAMMAR_SERVICE, SetGrammarRequest(step.request)))
+            request = SetGrammarRequest(step.request)
+            events.append(CallService(time, SET_GRAMMAR_SERVICE, request, step.after_text))
         elif isinstance(step, Listen):
-            events.append(SendGoal(time, RecogniseSpeechGoal(step.wait)))
+            events.append(SendGoal(time, RecogniseSpeechGoal(step.wait), step.after_text))
             last_deadline = max(last_deadline, time + step.wait)
     end = max(time + config.speech_pause_period, last_deadline) + SETTLE_SECONDS
     return Timeline(events, end)

@@ -237,8 +237,15 @@ class RosReplay:
         """Wait (a while) for what the node published in memory by now, before the next event.
 
         In real time waiting would shift the events after it, so it waits only at the end."""
-        if self._options.real_time and not final:
-            return
+        if final or not self._options.real_time:
+            self._wait_for_due(played)
+
+    def wait_for_text(self, played: int) -> None:
+        """In sim time settle has waited already; in real time the call's answer moves the events
+        after it later by the wait (ScenarioWallClock)."""
+        self._wait_for_due(played)
+
+    def _wait_for_due(self, played: int) -> None:
         due = self._schedule.due(self._now, played)
         if self._options.real_time:  # when a partial comes decides what it says: not compared
             due = dataclasses.replace(due, partials=())

@@ -6,7 +6,7 @@ thread that moves the clock.
 
 import heapq
 import threading
-from typing import Callable, List, Tuple
+from typing import Callable, List, Optional, Tuple
 
 
 class FakeTimer:
@@ -38,6 +38,12 @@ class FakeClock:
             heapq.heappush(self._queue, (max(when, self._now), self._sequence, timer))
             self._sequence += 1
         return timer
+
+    def next_due(self) -> Optional[float]:
+        """When the next timer that is still set fires; None when none is."""
+        with self._lock:
+            due = [when for when, _, timer in self._queue if not timer.cancelled]
+        return min(due, default=None)
 
     def advance_to(self, when: float) -> None:
         """Move to ``when``, firing every timer due by then, also those set while firing."""

@@ -45,6 +45,9 @@ class _Recorder:
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
         self.log.append("goal")
 
+    def wait_for_text(self, played: int) -> None:
+        self.log.append(f"wait for text {played}")
+
 
 def test_the_walk_stops_at_every_event_time_stop_and_the_end_and_settles_around_each_event() -> None:
     timeline = Timeline(
@@ -85,6 +88,34 @@ def test_the_walk_stops_at_every_event_time_stop_and_the_end_and_settles_around_
         "settle 6",
         "clock 4.0",
         "settle 6 final",
+    ]
+
+
+def test_a_call_or_goal_that_waits_for_a_text_waits_after_settling_and_before_it_is_made() -> None:
+    timeline = Timeline(
+        [
+            Publish(0.5, Float32MultiArray(data=[0.0])),
+            CallService(2.0, SET_ENABLED_SERVICE, SetEnabledRequest("false"), after_text=True),
+            SendGoal(2.0, RecogniseSpeechGoal(1.0), after_text=True),
+            SendGoal(2.0, RecogniseSpeechGoal(1.0)),
+        ],
+        end=3.0,
+    )
+    recorder = _Recorder()
+    play(timeline, recorder, recorder)
+    assert recorder.log[recorder.log.index("clock 2.0") :] == [
+        "clock 2.0",
+        "settle 1",
+        "wait for text 1",
+        f"call {SET_ENABLED_SERVICE}",
+        "settle 2",
+        "wait for text 2",
+        "goal",
+        "settle 3",
+        "goal",
+        "settle 4",
+        "clock 3.0",
+        "settle 4 final",
     ]
 
 
