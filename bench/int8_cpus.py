@@ -25,7 +25,8 @@ from typing import Dict, List
 
 from bench import avx2_cpu
 from fixtures import recordings
-from fixtures.trained_whisper import BASE, TINY_EN, TrainedWhisper, model_directory
+from fixtures.trained_weights import BASE, TINY_EN, TrainedWhisper
+from fixtures.trained_whisper import model_directory
 from speech_event.exporters.quantize import SIGNED_PER_TENSOR, Int8Scheme, quantize_directory
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer

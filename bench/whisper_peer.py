@@ -31,7 +31,8 @@ from typing import Any, Dict, List, Sequence
 
 from bench.whisper_runtime import FASTER_WHISPER, OURS, PRECISIONS, Figures, recordings
 from fixtures.recordings import SAMPLE_RATE, TESTDATA, spoken_words, word_errors
-from fixtures.trained_whisper import BASE, TINY_EN, TrainedWhisper, faster_whisper_directory, model_directory
+from fixtures.trained_weights import BASE, TINY_EN, TrainedWhisper
+from fixtures.trained_whisper import faster_whisper_directory, model_directory
 from speech_event.errors import ModelError
 
 MODELS: Dict[str, TrainedWhisper] = {"tiny.en": TINY_EN, "base": BASE}

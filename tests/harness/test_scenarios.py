@@ -399,5 +399,10 @@ def test_the_demo_runs_whisper_tiny_en_int8_with_the_commands_unless_told_otherw
         (tmp_path / "demo.ini").write_text("\n".join(lines) + "\n")
         options = [*options, "-c", str(tmp_path / "demo.ini")]
     arguments = build_parser().parse_args(["demo", *options])
-    recognizer, config = demo_engine(arguments, base_config(arguments.config))
-    assert (recognizer, config.quantization, config.grammar) == (engine, quantization, grammar)
+    chosen = demo_engine(arguments, base_config(arguments.config))
+    assert (chosen.recognizer, chosen.config.quantization, chosen.config.grammar) == (
+        engine,
+        quantization,
+        grammar,
+    )
+    assert chosen.notice == ""

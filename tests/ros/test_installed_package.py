@@ -16,47 +16,18 @@ import rospy
 from harness.processes import Processes
 from speech_event.srv import SetLanguage
 from tests.helpers.paths import ROOT
+from tests.helpers.wheel import build_wheel, install
 from tests.ros.conftest import serves, wait_for
 
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("wheel")
-    # From a copy: setuptools builds in the source folder, and build/ there could hold stale files.
-    source = out / "source"
-    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", ".tox", "build", "*.egg-info"))
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "wheel",
-            "--quiet",
-            "--no-deps",
-            "--no-build-isolation",
-            "-w",
-            str(out),
-            str(source),
-        ],
-        check=True,
-        capture_output=True,
-    )
-    (built,) = out.glob("speech_event-*.whl")
-    return built
-
-
-def _install(wheel: Path, target: Path) -> Path:
-    subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target), str(wheel)],
-        check=True,
-        capture_output=True,
-    )
-    return target
+    return build_wheel(tmp_path_factory.mktemp("wheel"))
 
 
 @pytest.fixture
 def installed(wheel: Path, tmp_path: Path) -> Iterator[Path]:
-    yield _install(wheel, tmp_path / "site")
+    yield install(wheel, tmp_path / "site")
 
 
 def _away_from_the_checkout(roscore: Dict[str, str], site: Path, tmp_path: Path) -> Dict[str, str]:
