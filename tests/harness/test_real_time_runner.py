@@ -1,6 +1,6 @@
 """The in-memory replay on the wall clock (harness/real_time_runner.py): what it collects, and a
 text that never comes failing the scenario with how long it was waited for. Every scenario played
-so beside a busy core: tests/real/test_scenarios_in_real_time.py."""
+so beside two busy processes: tests/real/test_scenarios_in_real_time.py."""
 
 import time
 

@@ -1,12 +1,12 @@
-"""Real recordings through the driver and the node, in real time, with a core kept busy (issue 30,
+"""Real recordings through the driver and the node, in real time, with the cores kept busy (issue 30,
 item 2; issue 31, item 3): the same recordings give the same published texts in every run, with
 partial results on or off, on every engine the tests have.
 
 Each run is the driver (scripts/speech_event_driver.py, ``--transport memory``: the node in the same
 process, on the wall clock, with its recognition worker thread) playing one WAV file that holds
 Debian's pocketsphinx-testdata recordings one after another, 2.5 s apart. Per engine, two runs with
-partial results (the default) and one without run side by side, beside a process spinning on one
-core: how many partial runs fit, how late each block's callback runs and how fast the worker is
+partial results (the default) and one without run side by side, beside two processes spinning
+(issue 56): how many partial runs fit, how late each block's callback runs and how fast the worker is
 all differ between the runs; the texts must not.
 """
 
@@ -22,7 +22,7 @@ import pytest
 
 from fixtures import recordings
 from fixtures.recordings import Recording
-from tests.helpers.load import a_core_kept_busy
+from tests.helpers.load import cores_kept_busy
 from tests.helpers.paths import ROOT
 
 RATE = recordings.SAMPLE_RATE
@@ -98,9 +98,9 @@ def _three_runs(recognizer: str, config: str = "") -> Dict[str, Run]:
 
 
 def _side_by_side(tmp_path: Path, said: Sequence[Recording], runs: Dict[str, Run]) -> Dict[str, List[str]]:
-    """Every run at once, playing the same session, beside a busy core: each run's texts."""
+    """Every run at once, playing the same session, beside two busy processes: each run's texts."""
     session = _session(tmp_path / "session.wav", said)
-    with a_core_kept_busy():
+    with cores_kept_busy():
         drivers = {
             name: _start(tmp_path / f"run{index}", session, recognizer, config)
             for index, (name, (recognizer, config)) in enumerate(runs.items())
