@@ -74,8 +74,8 @@ from speech_event.messages import Float32MultiArray, SetGrammarRequest, String, 
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Clock, Executor, Recognizer
-from speech_event.recognizers.onnx.grammar_choice import spelt
 from speech_event.speech_end import SpeechEnds
+from speech_event.spelling import spelt
 from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 
 RATE = 48000

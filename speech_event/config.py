@@ -101,9 +101,16 @@ class SpeechEventConfig:
     # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
     # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
     partial_period: float = 0.5
+    # How free speech's texts are written on /speechEvent/text, the action's result and
+    # /speechEvent/partial: robot (lower case, no punctuation, numbers in words, as the robot's NeMo
+    # model writes, which its Behaviour Controller's case-sensitive search for "yes" needs) or
+    # engine (as the engine writes: Whisper's " Yes."). A grammar's phrases are published as it
+    # spells them; /speechEvent/transcript carries the engine's writing either way.
+    text_style: str = "robot"
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
+TEXT_STYLES = ("robot", "engine")
 QUANTIZATIONS = ("none", "int8")
 # Partial results more often than this would only keep the worker busy: no one reads that fast.
 SHORTEST_PARTIAL_PERIOD = 0.1
@@ -244,6 +251,7 @@ _FORMAT = KeyValueFormat(
         "early_pause": seconds(0.0, 60.0),
         "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
         "partial_period": seconds(0.0, 60.0),
+        "text_style": KeyRule(choice(*TEXT_STYLES), " or ".join(TEXT_STYLES)),
         "end_of_speech": KeyRule(
             optional(number(float, 0.0, 60.0)),
             "a number of seconds from 0 (off) to 60, or nothing for 0.3 in grammar mode (Whisper, "

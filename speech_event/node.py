@@ -350,7 +350,9 @@ class SpeechEventNode:
         if not self._enabled or pending == 0:
             return None
         first = self._collecting_since if self._collecting_since is not None else last
-        origin = TextOrigin(self._language, engine_name(self._recognizer), first, last)
+        origin = TextOrigin(
+            self._language, engine_name(self._recognizer), first, last, self._grammar is not None
+        )
         return UtteranceSoFar(
             pending,
             self._assembler.peek,

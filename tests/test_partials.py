@@ -173,7 +173,8 @@ def test_a_partial_waits_for_the_worker_and_a_closing_utterance_cancels_it() -> 
 
 def test_an_incremental_engine_is_fed_only_new_audio_on_its_own_decoder() -> None:
     engine = IncrementalDigest()
-    rig = Rig(dataclasses.replace(PARTIALS, speculative_recognition=False), engine)
+    # the engine's own writing: its texts count samples in digits
+    rig = Rig(dataclasses.replace(PARTIALS, speculative_recognition=False, text_style="engine"), engine)
     listener = Listener(rig)
     samples = np.arange(4096 * 5, dtype=np.float32) / 4096 / 5
     rig.speak(samples)  # blocks at 0.256 .. 1.28 s

@@ -14,9 +14,9 @@ from speech_event.interfaces.diagnostics import DISCARDED_BACKLOG, NodeStatistic
 from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
 from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, String, TranscriptMessage
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
-from speech_event.pipeline.transcript import checked_transcript, text_to_publish
+from speech_event.pipeline.transcript import checked_transcript, styled, text_to_publish
 from speech_event.ports import Publisher, Transcript, Transport, engine_name
-from speech_event.topics import PARTIAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
+from speech_event.topics import PARTIAL_TOPIC, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC, TRANSCRIPT_TOPIC
 
 _LOG = logging.getLogger("speech_event")
 
@@ -29,6 +29,8 @@ class TextOrigin:
     engine: str  # the engine's class name
     first_block: float  # when the utterance's first block arrived (NO_UTTERANCE: no utterance)
     last_block: float  # when its last block, so far for a partial, arrived
+    # A grammar was in force: the text is its phrase, published as the grammar spells it.
+    phrase: bool = False
 
 
 class Publishes(Protocol):
@@ -60,21 +62,25 @@ class Publication:
         self._partial = transport.advertise(PARTIAL_TOPIC, String)
         self._transcript = transport.advertise(TRANSCRIPT_TOPIC, TranscriptMessage)
 
-    def publish(self, text: str, origin: TextOrigin, confidence: Optional[float] = None) -> None:
-        """Publish a final ``text`` on the text topic, and its transcript message (nothing
-        before ``start``)."""
+    def publish(
+        self, text: str, origin: TextOrigin, confidence: Optional[float] = None, written: Optional[str] = None
+    ) -> None:
+        """Publish a final ``text`` on the text topic, and its transcript message with the text as
+        the engine ``written`` it (default: ``text``); nothing before ``start``."""
         if self._text is not None:
             self._text.publish(String(text))
-        self._publish_transcript(text, True, confidence, origin)
+        self._publish_transcript(text if written is None else written, True, confidence, origin)
 
     def publish_error(self, text: str, language: str, engine: str) -> None:
         """Publish an error of no utterance (SOUND_DETECTION_DOWN) as a final text."""
         self.publish(text, TextOrigin(language, engine, NO_UTTERANCE, NO_UTTERANCE))
 
     def partial(self, transcript: Transcript, origin: TextOrigin) -> None:
-        """Publish the text so far of the utterance being spoken, and its transcript message."""
+        """Publish the text so far of the utterance being spoken (as text_style writes it), and its
+        transcript message (as the engine wrote it)."""
         if self._partial is not None:
-            self._partial.publish(String(transcript.text))
+            text = transcript.text if origin.phrase else styled(transcript.text, self.config.text_style)
+            self._partial.publish(String(text))
         self._publish_transcript(transcript.text, False, transcript.confidence, origin)
 
     def _publish_transcript(
@@ -121,7 +127,8 @@ class Publication:
             self.statistics.discarded(discard.value)
             _LOG.info("utterance %d (%.2f s) is not transcribed: %s", number, seconds, discard.value)
         else:
-            text = text_to_publish(transcript, self.config)
+            phrase = job.grammar is not None
+            text = text_to_publish(transcript, self.config, phrase)
             if transcript.rejected is not None:
                 self.statistics.out_of_grammar()
                 _LOG.info(
@@ -135,8 +142,9 @@ class Publication:
                 _LOG.info("utterance %d (%.2f s): %r -> %r", number, seconds, transcript.text, text)
             if text is not None:
                 engine = engine_name(recognizer)
-                origin = TextOrigin(job.language, engine, job.started_at, job.last_block_at)
-                self.publish(text, origin, transcript.confidence)
+                origin = TextOrigin(job.language, engine, job.started_at, job.last_block_at, phrase)
+                written = transcript.text.strip() if text != SPEECH_NOT_RECOGNIZED else text
+                self.publish(text, origin, transcript.confidence, written)
                 self.statistics.published()
         self.action.utterance_done(number, None if discard is not None else text or "")
         if self.store is not None:  # after publishing: storing never delays or loses a transcript

@@ -1,4 +1,4 @@
-"""Step 5 of the pipeline: what, if anything, to publish for one transcript."""
+"""Step 5 of the pipeline: what, if anything, to publish for one transcript, and how it is written."""
 
 import logging
 import math
@@ -7,6 +7,7 @@ from typing import Optional, Union
 
 from speech_event.config import SpeechEventConfig
 from speech_event.ports import Transcript
+from speech_event.spelling import robot_written
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
 
 _LOG = logging.getLogger("speech_event")
@@ -53,10 +54,17 @@ def _judged(result: object) -> Union[Transcript, str]:
     return result
 
 
-def text_to_publish(transcript: Transcript, config: SpeechEventConfig) -> Optional[str]:
-    """The stripped text; for an empty or low-confidence one, the error text or nothing."""
-    text = transcript.text.strip()
+def text_to_publish(transcript: Transcript, config: SpeechEventConfig, phrase: bool) -> Optional[str]:
+    """The text as ``config.text_style`` writes it (a grammar's ``phrase`` as the grammar spells
+    it); for an empty or low-confidence one, the error text or nothing."""
+    text = transcript.text.strip() if phrase else styled(transcript.text, config.text_style)
     confident = transcript.confidence is None or transcript.confidence >= config.confidence
     if text and confident:
         return text
     return SPEECH_NOT_RECOGNIZED if config.publish_unrecognized else None
+
+
+def styled(text: str, style: str) -> str:
+    """A free-speech ``text`` as the text_style ``style`` writes it: ``robot``, as the robot's NeMo
+    model writes (speech_event/spelling.py), or ``engine``, as the engine wrote it (stripped)."""
+    return robot_written(text) if style == "robot" else text.strip()

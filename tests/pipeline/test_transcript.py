@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from speech_event.config import SpeechEventConfig
-from speech_event.pipeline.transcript import checked_transcript, proper_transcript, text_to_publish
+from speech_event.pipeline.transcript import checked_transcript, proper_transcript, styled, text_to_publish
 from speech_event.ports import Transcript
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
 
@@ -82,15 +82,50 @@ def test_speculations_and_partials_take_an_answer_as_the_final_recognition_does_
     assert caplog.records == []
 
 
+@pytest.mark.parametrize(
+    ("written", "robot"),
+    [
+        (" Yes.", "yes"),
+        ("No, thank you.", "no thank you"),
+        ("GO!", "go"),
+        ("I'm not sure...", "i'm not sure"),
+        ("'Hello,' she said.", "hello she said"),
+        ("10 of clubs.", "ten of clubs"),
+        ("It costs 1,250 francs.", "it costs one thousand two hundred fifty francs"),
+        ("Twenty-one  guns", "twenty one guns"),
+        ("Un café, s'il vous plaît.", "un café s'il vous plaît"),
+        ("Muraho, amakuru?", "muraho amakuru"),
+        ("...", ""),
+    ],
+)
+def test_free_speech_is_written_as_the_robots_model_writes_unless_the_engines_writing_is_asked_for(
+    written: str, robot: str
+) -> None:
+    assert styled(written, "robot") == robot
+    assert styled(written, "engine") == written.strip()
+    engine = SpeechEventConfig(text_style="engine")
+    assert text_to_publish(Transcript(written), SpeechEventConfig(), phrase=False) == (robot or None)
+    assert text_to_publish(Transcript(written), engine, phrase=False) == written.strip()
+
+
+def test_a_grammars_phrase_is_published_as_the_grammar_spells_it() -> None:
+    assert text_to_publish(Transcript("Thank You"), SpeechEventConfig(), phrase=True) == "Thank You"
+
+
 def test_the_published_text_is_stripped() -> None:
-    assert text_to_publish(Transcript("  go to the kitchen \n"), SpeechEventConfig()) == "go to the kitchen"
+    assert (
+        text_to_publish(Transcript("  go to the kitchen \n"), SpeechEventConfig(), phrase=False)
+        == "go to the kitchen"
+    )
 
 
 def test_a_confidence_at_the_threshold_is_published_and_one_below_is_not() -> None:
     config = SpeechEventConfig(confidence=0.5, publish_unrecognized=True)
-    assert text_to_publish(Transcript("go", 0.5), config) == "go"
-    assert text_to_publish(Transcript("go", 0.49), config) == SPEECH_NOT_RECOGNIZED
-    assert text_to_publish(Transcript("go"), config) == "go"  # no confidence reported: not judged
+    assert text_to_publish(Transcript("go", 0.5), config, phrase=False) == "go"
+    assert text_to_publish(Transcript("go", 0.49), config, phrase=False) == SPEECH_NOT_RECOGNIZED
+    assert (
+        text_to_publish(Transcript("go"), config, phrase=False) == "go"
+    )  # no confidence reported: not judged
 
 
 @given(
@@ -103,7 +138,7 @@ def test_an_empty_transcript_publishes_the_error_text_or_nothing_whatever_its_co
 ) -> None:
     config = SpeechEventConfig(publish_unrecognized=publish_unrecognized)
     expected = SPEECH_NOT_RECOGNIZED if publish_unrecognized else None
-    assert text_to_publish(Transcript(text, confidence), config) == expected
+    assert text_to_publish(Transcript(text, confidence), config, phrase=False) == expected
 
 
 @given(confidence=st.floats(0.0, 1.0, exclude_max=True), publish_unrecognized=st.booleans())
@@ -112,4 +147,4 @@ def test_a_transcript_below_the_confidence_threshold_publishes_the_error_text_or
 ) -> None:
     config = SpeechEventConfig(confidence=1.0, publish_unrecognized=publish_unrecognized)
     expected = SPEECH_NOT_RECOGNIZED if publish_unrecognized else None
-    assert text_to_publish(Transcript("go to the kitchen", confidence), config) == expected
+    assert text_to_publish(Transcript("go to the kitchen", confidence), config, phrase=False) == expected

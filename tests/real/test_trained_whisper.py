@@ -20,10 +20,11 @@ from fixtures.trained_whisper import tiny_en_directory
 from fixtures.tts import speak_tts
 from speech_event.grammar import load_grammar, phrases_grammar
 from speech_event.pipeline.resample import resample
-from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, heard_as, spelt
+from speech_event.recognizers.onnx.grammar_choice import NEURAL_GRAMMAR_THRESHOLD, heard_as
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.manifest import load_whisper_manifest
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+from speech_event.spelling import spelt
 from tests.helpers.paths import ROOT
 
 RECORDINGS = recordings.cards() + recordings.librivox()

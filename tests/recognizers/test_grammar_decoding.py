@@ -20,12 +20,11 @@ from speech_event.recognizers.onnx.grammar_choice import (
     GrammarChoice,
     heard_as,
     least_deciding_score,
-    number_words,
     one_word_changed,
-    spelt,
 )
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
+from speech_event.spelling import number_words, spelt
 
 COMMANDS = requested_grammar("go left|stop|go to the kitchen|yes|no")
 Build = Callable[[Optional[Grammar], float], Grammars]

@@ -56,12 +56,12 @@ for base's " Hello, I'm Daryl"), and the highest evidence at any ratio, +14.1, w
 ("go to the kitchen later": its command at -4.6 nats), which the slack keeps out."""
 
 import math
-import re
 from dataclasses import dataclass, field
 from typing import Dict, List, Mapping, Optional
 
 from speech_event.ports import Transcript
 from speech_event.recognizers.onnx.sounds_alike import sounds_alike
+from speech_event.spelling import spelt
 
 # The least ratio of a phrase the free text is misheard from. Trained tiny.en: commands with a
 # word misheard -0.1 to -3.8 nats (festival's and espeak's voices), heard as sound-alike words
@@ -91,59 +91,6 @@ ONE_WORD_EVIDENCE = 7.0
 # How far a one-word phrase heard as another word must be above every other phrase for its evidence
 # to count: the people's digits heard as another word had 3.0 nats and more over the next digit.
 UNAMBIGUOUS_GAP = 2.0
-
-_NOT_SPELT = re.compile(r"[^a-z' ]+")
-_NUMBER = re.compile(r"\d+")
-_THOUSANDS_COMMA = re.compile(r"(?<=\d),(?=\d{3}\b)")
-_ONES = [
-    "zero",
-    "one",
-    "two",
-    "three",
-    "four",
-    "five",
-    "six",
-    "seven",
-    "eight",
-    "nine",
-    "ten",
-    "eleven",
-    "twelve",
-    "thirteen",
-    "fourteen",
-    "fifteen",
-    "sixteen",
-    "seventeen",
-    "eighteen",
-    "nineteen",
-]
-_TENS = ["-", "-", "twenty", "thirty", "forty", "fifty", "sixty", "seventy", "eighty", "ninety"]
-
-
-def number_words(number: int) -> str:
-    """``number`` in words as a grammar spells it (1234: "one thousand two hundred thirty four");
-    from a million on, digit by digit."""
-    if number < 20:
-        return _ONES[number]
-    if number < 100:
-        return " ".join([_TENS[number // 10]] + ([_ONES[number % 10]] if number % 10 else []))
-    if number < 1000:
-        rest = [number_words(number % 100)] if number % 100 else []
-        return " ".join([_ONES[number // 100], "hundred", *rest])
-    if number < 1_000_000:
-        rest = [number_words(number % 1000)] if number % 1000 else []
-        return " ".join([number_words(number // 1000), "thousand", *rest])
-    return " ".join(_ONES[int(digit)] for digit in str(number))
-
-
-def spelt(text: str) -> str:
-    """``text`` as a grammar writes phrases: lower-case words of a-z and ', punctuation dropped,
-    numbers in words. Whisper writes numbers in digits ("10 of clubs." for the cards recording of
-    "ten of clubs"), which a grammar of words would otherwise never match."""
-    words = _NUMBER.sub(
-        lambda digits: f" {number_words(int(digits.group()))} ", _THOUSANDS_COMMA.sub("", text)
-    )
-    return " ".join(_NOT_SPELT.sub(" ", words.lower()).split())
 
 
 @dataclass(frozen=True)

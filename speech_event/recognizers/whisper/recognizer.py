@@ -34,7 +34,6 @@ from speech_event.recognizers.onnx.grammar_choice import (
     GrammarChoice,
     heard_as,
     least_deciding_score,
-    spelt,
 )
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
@@ -44,6 +43,7 @@ from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 from speech_event.recognizers.whisper.written_forms import phrase_as_written, phrase_variants
+from speech_event.spelling import spelt
 
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10

@@ -12,7 +12,7 @@ scores -8.4 nats against it without the commas, -3.9 with them (within the thres
 import re
 from typing import List, NamedTuple, Optional
 
-from speech_event.recognizers.onnx.grammar_choice import spelt
+from speech_event.spelling import spelt
 
 # A word of the free text: what comes before its letters or digits, they, and what comes after
 _WRITTEN_WORD = re.compile(r"^(\W*)(.*?)(\W*)$", re.DOTALL)
