@@ -19,8 +19,8 @@ from harness.memory_runner import SoundDetectionOnTheBus
 from harness.outcome import REAL_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.scenario import Scenario
-from harness.schedule import TEXT_DEADLINE, ScenarioWallClock, Schedule
-from harness.timeline import build_timeline
+from harness.schedule import TEXT_DEADLINE, ScenarioWallClock, Schedule, block_just_played
+from harness.timeline import Timeline, build_timeline
 from speech_event import TEXT_TOPIC
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
@@ -36,9 +36,14 @@ WORKER_STOP_TIMEOUT = 30.0
 class _RealTime:
     """The scenario clock is the wall clock from t = 0 on; what the node publishes is collected."""
 
-    def __init__(self, bus: InMemoryBus, schedule: Schedule, text_deadline: float) -> None:
+    def __init__(
+        self, bus: InMemoryBus, schedule: Schedule, text_deadline: float, timeline: Timeline, pause: float
+    ) -> None:
         self.bus = bus
         self._schedule = schedule
+        self._events = timeline.events
+        self._pause = pause
+        self._goals_sent = 0
         self._text_deadline = text_deadline
         self.outcome = Outcome(clock=REAL_TIME)
         self._clock = ScenarioWallClock()
@@ -68,9 +73,14 @@ class _RealTime:
         self._clock.sleep_until(when)
 
     def settle(self, played: int, final: bool) -> None:
-        """Only at the end: waiting before an event would shift the events after it."""
+        """Only at the end: waiting before an event would shift the events after it. After a block
+        that went out late before a silence, the events after it move later (played_late)."""
         if final:
             self._wait_for_due(played)
+            return
+        block = block_just_played(self._events, played, self._now)
+        if block is not None and self._goals_sent == len(self.outcome.results):  # no goal waits
+            self._clock.played_late(*block, self._pause)
 
     def wait_for_text(self, played: int) -> None:
         """The call waits; the call's answer then moves the events after it (ScenarioWallClock)."""
@@ -88,6 +98,7 @@ class _RealTime:
         self._clock.answered(self._now)
 
     def send_goal(self, goal: RecogniseSpeechGoal) -> None:
+        self._goals_sent += 1
         self.bus.send_goal(ACTION_NAME, goal)
         self._clock.answered(self._now)
 
@@ -99,7 +110,7 @@ def run_in_real_time(scenario: Scenario, text_deadline: Optional[float] = None) 
     timeline = build_timeline(scenario)
     bus = InMemoryBus()
     deadline = TEXT_DEADLINE if text_deadline is None else text_deadline
-    runner = _RealTime(bus, Schedule.of(scenario), deadline)
+    runner = _RealTime(bus, Schedule.of(scenario), deadline, timeline, scenario.config.speech_pause_period)
     sound_detection = SoundDetectionOnTheBus(bus)
     clock, executor = SystemClock(), ThreadExecutor()
     with ScenarioEngines(scenario.recognizer, scenario.config) as engines:

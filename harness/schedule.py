@@ -11,11 +11,12 @@ fires on ROS at the time it fires in memory, before the events that come after i
 import math
 import time
 from dataclasses import dataclass
-from typing import Callable, List, Optional, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple
 
 from harness.memory_runner import run_in_memory
 from harness.outcome import Outcome, Published
 from harness.scenario import Scenario
+from harness.timeline import Event, Publish
 
 # After each clock step, the node's timers run; after the step that ends an utterance, its
 # recognition runs and its text is published: the runner waits for that text until it comes, or
@@ -131,7 +132,8 @@ class HealthChecks:
 
 class ScenarioWallClock:
     """The scenario clock of a replay in real time: the wall clock from t = 0 on, moved later by
-    whole health-check periods when a client's call was answered late.
+    whole health-check periods when a client's call was answered late, or a block that ends an
+    utterance went out late (played_late).
 
     The robot's clients wait for the node's answer before they go on (the Behaviour Controller sets
     a grammar, then the robot asks its question), so what follows a call comes after the answer.
@@ -161,6 +163,17 @@ class ScenarioWallClock:
         """Wait until ``when`` on the scenario clock (no wait once it has passed)."""
         time.sleep(max(0.0, self._start + when - time.monotonic()))
 
+    def played_late(self, played_at: float, next_at: float, pause: float) -> None:
+        """A block due at ``played_at`` has gone out: when more than LATE_ANSWER late and the next
+        event is ``pause`` or more after it (the silence after an utterance), the rest of the
+        scenario moves later by the whole periods that cover the delay, so that the silence keeps
+        its length. Played at their old times instead, the events after it came closer: on a busy
+        machine the tones 'a' went out 0.6 s late, and 'go to the kitchen' 2 s after it in the
+        scenario joined it, one utterance (min_utterance_length in real time on a roscore)."""
+        late = self.now() - played_at
+        if late > LATE_ANSWER and next_at - played_at >= pause:
+            self._start += math.ceil(late / self._period) * self._period
+
     def answered(self, asked_at: float) -> None:
         """A call made at ``asked_at`` (scenario clock) has been answered: when more than
         LATE_ANSWER later, the rest of the scenario moves later by the whole periods that cover it."""
@@ -175,3 +188,14 @@ def scenario_start(node_started: float, now: float, period: float) -> float:
     scenario clock (CHECK_LEAD before them), at least ALIGN_MARGIN from ``now``."""
     checks_passed = math.ceil((now + ALIGN_MARGIN - node_started) / period)
     return node_started + checks_passed * period + CHECK_LEAD
+
+
+def block_just_played(events: Sequence[Event], played: int, now: float) -> Optional[Tuple[float, float]]:
+    """When the event just played (the ``played``-th, at ``now``) is a block with another event
+    after it: its time and the next event's; else None."""
+    if not 0 < played < len(events):
+        return None
+    last = events[played - 1]
+    if not isinstance(last, Publish) or last.time != now:
+        return None
+    return last.time, events[played].time

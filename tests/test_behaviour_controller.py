@@ -1,11 +1,11 @@
-"""The Behaviour Controller's rule (tests/helpers/behaviour_controller.py) as its C++ reads texts:
+"""The Behaviour Controller's rule (harness/behaviour_controller.py) as its C++ reads texts:
 case-sensitive substrings, the latest text of each second, an error fails, 10 s and it gives up;
 and what it concludes from texts as each engine and text_style writes them."""
 
 import pytest
 
+from harness.behaviour_controller import FAILURE, NO, NOTHING, YES, conclusion, visitor_response
 from speech_event.pipeline.transcript import styled
-from tests.helpers.behaviour_controller import FAILURE, NO, NOTHING, YES, conclusion, visitor_response
 
 
 @pytest.mark.parametrize(

@@ -52,8 +52,9 @@ from harness.schedule import (
     HealthChecks,
     ScenarioWallClock,
     Schedule,
+    block_just_played,
 )
-from harness.timeline import SendGoal, build_timeline
+from harness.timeline import Event, SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros
 from speech_event.config import format_config
@@ -160,6 +161,8 @@ class RosReplay:
         self._action_client = actionlib.ActionClient(ACTION_NAME, action)
         # A goal handle must be kept, or actionlib stops tracking its goal.
         self._goals: List[actionlib.ClientGoalHandle] = []
+        self._events: List[Event] = []  # the timeline being played, and its pause (played_late)
+        self._pause = 0.0
         self._schedule = Schedule(Outcome())  # of the scenario being played
         self._timers_fired: Set[float] = set()  # its stops: when the node's timers fired in memory
         self._node_uri: Optional[str] = None  # the node under test, once it runs
@@ -236,9 +239,14 @@ class RosReplay:
     def settle(self, played: int, final: bool) -> None:
         """Wait (a while) for what the node published in memory by now, before the next event.
 
-        In real time waiting would shift the events after it, so it waits only at the end."""
+        In real time waiting would shift the events after it, so it waits only at the end; after
+        a block that went out late before a silence, the events after it move later (played_late)."""
         if final or not self._options.real_time:
             self._wait_for_due(played)
+            return
+        block = block_just_played(self._events, played, self._now)
+        if block is not None and len(self._goals) == len(self._outcome.results):  # no goal waits
+            self._wall.played_late(*block, self._pause)
 
     def wait_for_text(self, played: int) -> None:
         """In sim time settle has waited already; in real time the call's answer moves the events
@@ -420,6 +428,7 @@ class RosReplay:
 
     def play(self, scenario: Scenario) -> Outcome:
         timeline = build_timeline(scenario)
+        self._events, self._pause = timeline.events, scenario.config.speech_pause_period
         self._schedule = Schedule.of(scenario)
         self._timers_fired = set(self._schedule.stops)
         self._outcome = self._new_outcome()

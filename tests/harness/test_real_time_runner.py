@@ -6,15 +6,18 @@ import time
 
 import pytest
 
+from harness.memory_runner import SoundDetectionOnTheBus
 from harness.outcome import REAL_TIME
 from harness.real_time_runner import run_in_real_time
 from harness.report import passed, report
-from harness.scenario import parse_scenario
+from harness.scenario import load_scenario, parse_scenario
 from harness.schedule import Schedule
+from harness.timeline import build_timeline
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.services import RuntimeControl
-from speech_event.messages import SetGrammarResponse
+from speech_event.messages import Float32MultiArray, SetGrammarResponse
 from speech_event.pipeline.publication import Publication
+from tests.helpers.paths import ROOT
 
 # Two commands, two seconds apart, and a recognise_speech goal for the second.
 SCENARIO = {
@@ -87,3 +90,24 @@ def test_what_follows_a_late_answer_comes_after_it_with_the_scenario_silences_ke
     # the scenario clock moved with the answer (by a health-check period): each text a pause after its speech
     first, second = (message.time for message in outcome.published)
     assert 1.5 < first < 2.0 + 1.5 < second
+
+
+def test_a_block_that_goes_out_late_before_a_silence_does_not_join_the_speech_after_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """min_utterance_length on a busy roscore: 'a' went out 0.6 s late, 'go to the kitchen' came
+    2 s after it on the scenario clock, 1.4 s after it on the node's, and the two were one
+    utterance. The events after a late block before a silence move later with it."""
+    scenario = load_scenario(ROOT / "scenarios" / "min_utterance_length.toml", SpeechEventConfig())
+    last_of_a = sum(1 for event in build_timeline(scenario).events if event.time < 1.0) - 1
+    publish = SoundDetectionOnTheBus.publish
+
+    def late(sound_detection: SoundDetectionOnTheBus, index: int, message: Float32MultiArray) -> None:
+        if index == last_of_a:
+            time.sleep(0.8)
+        publish(sound_detection, index, message)
+
+    monkeypatch.setattr(SoundDetectionOnTheBus, "publish", late)
+    outcome = run_in_real_time(scenario)
+    assert [message.text for message in outcome.published] == ["go to the kitchen"]
+    assert passed(scenario, outcome)

@@ -6,7 +6,8 @@ from typing import List
 import pytest
 
 from harness import schedule
-from harness.schedule import CHECK_LEAD, LATE_ANSWER, ScenarioWallClock, scenario_start
+from harness.schedule import CHECK_LEAD, LATE_ANSWER, ScenarioWallClock, block_just_played, scenario_start
+from harness.timeline import CallService, Event, Publish
 
 
 class _Time:
@@ -63,3 +64,28 @@ def test_a_late_answer_moves_the_rest_by_the_whole_periods_that_cover_it(clock_t
         LATE_ANSWER
     )  # the next event, at the call's time: 10 s after the call on the wall clock
     assert clock_time.slept[-1] == pytest.approx(10.0 - 6.0)
+
+
+def test_a_block_late_before_a_silence_moves_the_rest_so_the_silence_keeps_its_length(
+    clock_time: _Time,
+) -> None:
+    clock = ScenarioWallClock()
+    clock.start(node_started=clock_time.time(), period=5.0)
+    clock.sleep_until(1.0)
+    clock_time.now += 0.6  # the block due at 1.0 went out at 1.6
+    clock.played_late(1.0, 1.085, pause=1.5)  # the next block of the same utterance: nothing moves
+    assert clock.now() == pytest.approx(1.6)
+    clock.played_late(1.0, 3.0, pause=1.5)  # the silence after it: one period later
+    assert clock.now() == pytest.approx(1.6 - 5.0)
+    clock_time.now += LATE_ANSWER - 0.6 + 5.0  # late by no more than LATE_ANSWER: nothing moves
+    clock.played_late(clock.now() - LATE_ANSWER, 9.0, pause=1.5)
+    assert clock.now() == pytest.approx(1.0 + LATE_ANSWER)
+
+
+def test_only_a_block_just_played_with_an_event_after_it_is_one() -> None:
+    events: List[Event] = [Publish(0.5, None), Publish(0.6, None), CallService(3.0, "s", None)]
+    assert block_just_played(events, 2, 0.6) == (0.6, 3.0)
+    assert block_just_played(events, 1, 0.5) == (0.5, 0.6)
+    assert block_just_played(events, 2, 3.0) is None  # played at an earlier time
+    assert block_just_played(events, 3, 3.0) is None  # a call, and the last event
+    assert block_just_played(events, 0, 0.0) is None

@@ -1,19 +1,20 @@
 """People answering the robot's question in free speech, as its Behaviour Controller listens: Speech
 Commands clips of "yes", "no" and "go" (tests/recordings/speech_commands, none of the held-out
 test files) played one after another to the node with the robot's configuration (no grammar), and
-what the controller concludes from each text (tests/helpers/behaviour_controller.py)."""
+what the controller concludes from each text (harness/behaviour_controller.py)."""
 
 from dataclasses import dataclass
 from typing import Any, Dict, List
 
+from harness.behaviour_controller import conclusion
 from harness.memory_runner import run_in_memory
 from harness.scenario import parse_scenario
 from speech_event.config import SpeechEventConfig
-from tests.helpers.behaviour_controller import conclusion
 from tests.helpers.paths import ROOT
 
 CLIPS = ROOT / "tests" / "recordings" / "speech_commands"
 ANSWERS = ("yes", "no", "go")  # "go" is one of the controller's affirmative words
+CLIPS_A_WORD = 4  # the first four speakers of each word (by file name): a minute of speech in all
 
 
 @dataclass(frozen=True)
@@ -26,7 +27,7 @@ class Heard:
 
 def answers_heard(recognizer: str) -> List[Heard]:
     """Each clip of ANSWERS through the node on ``recognizer``, 2 s of silence after each."""
-    said = [(word, path) for word in ANSWERS for path in sorted((CLIPS / word).glob("*.wav"))]
+    said = [(word, path) for word in ANSWERS for path in sorted((CLIPS / word).glob("*.wav"))[:CLIPS_A_WORD]]
     steps: List[Dict[str, Any]] = []
     for _, path in said:
         steps += [{"play": str(path)}, {"silence": 2.0}]

@@ -20,7 +20,7 @@ from tests.ros.conftest import ros_environment
 
 # Real time replays every scenario on the wall clock (about 500 s in all): in parts, side by side.
 REAL_TIME_SHARDS = 8
-SIM_TIME_SHARDS = 3
+SIM_TIME_SHARDS = 6
 
 
 def _harness(environment: Dict[str, str], *arguments: str) -> "subprocess.CompletedProcess[str]":

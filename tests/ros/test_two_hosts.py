@@ -27,6 +27,8 @@ from tests.ros.conftest import ros_environment, wait_for
 MASTER_PORT = 11311  # the namespaces are the test's own: the standard port is free there
 PERIOD = 1.0
 LINK_DOWN_SECONDS = 8.0
+# The tones scenarios across the two hosts in parts, side by side (about 370 s in all).
+TWO_HOSTS_SHARDS = 4
 TONES_SCENARIOS = [
     path
     for path in sorted((ROOT / "scenarios").glob("*.toml"))
@@ -97,11 +99,11 @@ def _texts(log: Path) -> List[str]:
     return [text for _, text in received(log)]
 
 
-@pytest.mark.parametrize("part", range(2))
+@pytest.mark.parametrize("part", range(TWO_HOSTS_SHARDS))
 def test_every_tones_scenario_passes_with_the_node_on_another_host(
     hosts: TwoHosts, tmp_path: Path, part: int
 ) -> None:
-    scenarios = shard(TONES_SCENARIOS, part, 2)
+    scenarios = shard(TONES_SCENARIOS, part, TWO_HOSTS_SHARDS)
     environment = _environment(hosts, tmp_path)
     processes = Processes(environment, tmp_path)
     try:
