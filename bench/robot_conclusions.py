@@ -13,10 +13,14 @@ them: "go" is one of the controller's yes words), and the LJ Speech readings. Pr
 asserted. Speculation and partial results are off: the texts are the same with them.
 
     python -m bench.robot_conclusions [--engines "tiny.en int8,base int8,pocketsphinx"] [--takes 1]
+        [--text-style robot|engine]
+
+``--text-style engine`` measures the node as it was before text_style: the engines' own writing.
 """
 
 import argparse
 import dataclasses
+import logging
 from dataclasses import dataclass, field
 from typing import Dict, List, Sequence, Tuple
 
@@ -27,6 +31,7 @@ from fixtures.noises import read_audio
 from fixtures.recordings import SPEECH_COMMANDS, ljspeech
 from harness.behaviour_controller import NO, YES, conclusion
 from harness.catalog import ScenarioEngines
+from speech_event.config import TEXT_STYLES
 from speech_event.spelling import robot_written
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
 
@@ -83,9 +88,9 @@ def readings() -> List[Said]:
     ]
 
 
-def conclusions(name: str, sets: Dict[str, Sequence[Said]]) -> Dict[str, Conclusions]:
+def conclusions(name: str, sets: Dict[str, Sequence[Said]], text_style: str) -> Dict[str, Conclusions]:
     recognizer, config = engine_config(name)
-    config = dataclasses.replace(config, publish_unrecognized=False)
+    config = dataclasses.replace(config, publish_unrecognized=False, text_style=text_style)
     tallies: Dict[str, Conclusions] = {}
     with ScenarioEngines(recognizer, config, simulated=True) as engines:
         run = NodeRun(engines.build(), config)
@@ -101,16 +106,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--engines", default="tiny.en int8,base int8,pocketsphinx")
     parser.add_argument("--takes", type=int, default=1, help="FSDD recordings of each digit a speaker")
+    parser.add_argument("--text-style", choices=TEXT_STYLES, default="robot")
     arguments = parser.parse_args()
+    logging.getLogger("speech_event").setLevel(logging.ERROR)  # clipped peaks: not what is measured
     sets: Dict[str, Sequence[Said]] = {
         "FSDD digits": fsdd(arguments.takes),
         "Speech Commands": speech_commands(),
         "LJ Speech": readings(),
     }
     for name in arguments.engines.split(","):
-        print(f"{name} (free speech, text_style robot):")
+        print(f"{name} (free speech, text_style {arguments.text_style}):")
         totals = Conclusions()
-        for set_name, tally in conclusions(name.strip(), sets).items():
+        for set_name, tally in conclusions(name.strip(), sets, arguments.text_style).items():
             print(tally.line(set_name))
             for example in tally.examples:
                 print(f"      {example}")
