@@ -170,14 +170,19 @@ class ScenarioWallClock:
         its length. Played at their old times instead, the events after it came closer: on a busy
         machine the tones 'a' went out 0.6 s late, and 'go to the kitchen' 2 s after it in the
         scenario joined it, one utterance (min_utterance_length in real time on a roscore)."""
-        late = self.now() - played_at
-        if late > LATE_ANSWER and next_at - played_at >= pause:
-            self._start += math.ceil(late / self._period) * self._period
+        if next_at - played_at >= pause:
+            self._later_if_late(played_at)
 
     def answered(self, asked_at: float) -> None:
         """A call made at ``asked_at`` (scenario clock) has been answered: when more than
         LATE_ANSWER later, the rest of the scenario moves later by the whole periods that cover it."""
-        late = self.now() - asked_at
+        self._later_if_late(asked_at)
+
+    def _later_if_late(self, due_at: float) -> None:
+        """What was due at ``due_at`` happened now: when more than LATE_ANSWER late, the rest of the
+        scenario moves later by the whole periods that cover the delay (so the node's checks still
+        fall at multiples of the period on the scenario clock)."""
+        late = self.now() - due_at
         if late > LATE_ANSWER:
             self._start += math.ceil(late / self._period) * self._period
 

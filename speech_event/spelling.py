@@ -55,19 +55,19 @@ def spelt(text: str) -> str:
     """``text`` as a grammar writes phrases: lower-case words of a-z and ', punctuation dropped,
     numbers in words. Whisper writes numbers in digits ("10 of clubs." for the cards recording of
     "ten of clubs"), which a grammar of words would otherwise never match."""
-    words = _NUMBER.sub(
-        lambda digits: f" {number_words(int(digits.group()))} ", _THOUSANDS_COMMA.sub("", text)
-    )
-    return " ".join(_NOT_SPELT.sub(" ", words.lower()).split())
+    return " ".join(_NOT_SPELT.sub(" ", _numbers_in_words(text).lower()).split())
 
 
 def robot_written(text: str) -> str:
     """``text`` as the robot's NeMo model writes: lower case, numbers in words, no punctuation but
     the apostrophes inside words ("i'm"), single spaces, nothing around; letters of any alphabet
     kept ("café")."""
-    words = _NUMBER.sub(
+    words = (word.strip("'") for word in _NOT_WRITTEN.sub(" ", _numbers_in_words(text).lower()).split())
+    return " ".join(word for word in words if word)
+
+
+def _numbers_in_words(text: str) -> str:
+    """``text`` with each number in words, set apart by spaces ("1,250" and "10" too)."""
+    return _NUMBER.sub(
         lambda digits: f" {number_words(int(digits.group()))} ", _THOUSANDS_COMMA.sub("", text)
-    )
-    return " ".join(
-        word.strip("'") for word in _NOT_WRITTEN.sub(" ", words.lower()).split() if word.strip("'")
     )
