@@ -2,8 +2,15 @@
 Whisper's rules (decoder with a key/value cache) -> tokens -> text.
 
 Audio longer than 30 s (Whisper's window) is cut at its quietest 0.1 s between 20 and 30 s into
-each piece; the pieces' texts are joined. Confidence: 1 - no_speech_prob of the first piece, as
-the robot's node reports it. A language with no token in the model directory's config.json (Whisper
+each piece; the pieces' texts are joined. A piece where nothing was said gives no text, by
+whisper.transcribe's own tests: its no-speech probability above ``no_speech_threshold`` (0.6), or
+its text a decoding loop, compressing by more than ``compression_ratio_threshold`` (2.4). Unlike
+whisper's, the no-speech test holds whatever the text's log-probability: tiny.en writes "you" for
+brown noise at -0.7 a token. Measured on tiny.en int8 (docs/benchmarks.md): 0.79 to 0.96 on
+white, pink and brown noise; on people's words it heard right 0.37 at most, 0.43 under pink
+noise at 10 dB, and above 0.6 only where it misheard. Babble is not told apart this way (0.41 to
+0.80: six people talking are speech). Confidence: 1 - no_speech_prob of the first piece, as the
+robot's node reports it. A language with no token in the model directory's config.json (Whisper
 has none for Kinyarwanda) is refused when the engine is built.
 
 With a grammar in force: the free greedy decoding, then each phrase that can decide scored by
@@ -18,6 +25,7 @@ piece is decoded then.
 """
 
 import dataclasses
+import zlib
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple, Union
 
@@ -45,11 +53,19 @@ from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 from speech_event.recognizers.whisper.written_forms import phrase_as_written, phrase_variants
 from speech_event.spelling import spelt
 
+NO_SPEECH_THRESHOLD = 0.6  # whisper.transcribe's defaults
+COMPRESSION_RATIO_THRESHOLD = 2.4
 SHORTEST_PIECE = 20 * SAMPLE_RATE
 QUIET_WINDOW = SAMPLE_RATE // 10
 ENGINE = "the Whisper engine"
 # A grammar's phrases, each with the token sequences of the forms the model can spell.
 PhraseForms = Dict[str, List[List[int]]]
+
+
+def compression_ratio(text: str) -> float:
+    """How much zlib compresses ``text`` (whisper.utils.compression_ratio): a loop compresses well."""
+    written = text.encode("utf-8")
+    return len(written) / len(zlib.compress(written)) if written else 0.0
 
 
 def pieces_at_quiet_points(audio: np.ndarray) -> List[np.ndarray]:
@@ -76,9 +92,13 @@ class WhisperRecognizer:
         runtime: Runtime = CPU_FP32,
         grammar: Optional[Grammar] = None,
         grammar_threshold: Optional[float] = None,
+        no_speech_threshold: Optional[float] = NO_SPEECH_THRESHOLD,
+        compression_ratio_threshold: Optional[float] = COMPRESSION_RATIO_THRESHOLD,
     ) -> None:
         """``grammar_threshold``: see onnx/grammar_choice.py (the ``grammar_threshold`` key); None:
-        NEURAL_GRAMMAR_THRESHOLD."""
+        NEURAL_GRAMMAR_THRESHOLD. ``no_speech_threshold``, ``compression_ratio_threshold``: a piece
+        of free speech above either says nothing (None: no such test), as whisper.transcribe's
+        options of those names."""
         directory = exported_directory(model_directory, ".pt", "export-whisper")
         self._manifest, self._pieces, self._model = load_whisper_directory(directory, runtime)
         if language not in self._manifest.languages:
@@ -101,6 +121,8 @@ class WhisperRecognizer:
                 "the files are not of one export"
             )
         self._runs = StoppableRuns()
+        self._no_speech_threshold = no_speech_threshold
+        self._compression_ratio_threshold = compression_ratio_threshold
         self._threshold = NEURAL_GRAMMAR_THRESHOLD if grammar_threshold is None else grammar_threshold
         self._grammars = CompiledGrammars(self._forms)
         self._grammars.use(grammar)
@@ -154,13 +176,20 @@ class WhisperRecognizer:
                 run,
             )
         results = [self.decode(piece, run) for piece in pieces_at_quiet_points(np.asarray(audio, np.float32))]
-        texts = [
-            text_of(result.tokens, self._pieces, self._manifest.timestamp_begin).strip() for result in results
-        ]
+        texts = [self._said(result) for result in results]
         no_speech = results[0].no_speech_prob
         return Transcript(
             " ".join(text for text in texts if text), None if no_speech is None else 1.0 - no_speech
         )
+
+    def _said(self, result: WhisperResult) -> str:
+        """The text of one piece of free speech, or "" where nothing was said."""
+        text = text_of(result.tokens, self._pieces, self._manifest.timestamp_begin).strip()
+        no_speech, most = result.no_speech_prob, self._no_speech_threshold
+        if no_speech is not None and most is not None and no_speech > most:
+            return ""
+        loop = self._compression_ratio_threshold
+        return "" if loop is not None and compression_ratio(text) > loop else text
 
     def _within(self, forms: PhraseForms, audio: np.ndarray, run: onnxruntime.RunOptions) -> Transcript:
         """The phrase of the grammar said in ``audio`` (at most 30 s), or none."""
