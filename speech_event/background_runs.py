@@ -92,6 +92,9 @@ class BackgroundRuns:
     # The utterance being collected; None when there is none (or the node is disabled).
     so_far: Callable[[], Optional[UtteranceSoFar]]
     worker_idle: Callable[[], bool]  # no closed utterance is being recognized or waits for it
+    # turn_end_model: whether the audio of the utterance so far says the turn is complete (free
+    # speech); None: the text alone decides.
+    turn_heard: Optional[Callable[[Audio], bool]] = None
     speculations: SpeculationCounts = field(init=False)  # how speculation fared
     partials: PartialCounts = field(init=False)  # how partial results fared
 
@@ -226,9 +229,10 @@ class BackgroundRuns:
         outcome = self._recognize_unless_cancelled(speculation, audio)
         if outcome is None:
             return
+        heard = self._heard_complete(speculation, audio, outcome)
         partial: Optional[Transcript] = None
         with self.lock:
-            job = self._speculation.finished(speculation, outcome)
+            job = self._speculation.finished(speculation, outcome, heard)
             if job is None and not speculation.cancelled:
                 if self._speculation.ends_turn(speculation):
                     self.turn.end_early()
@@ -243,6 +247,16 @@ class BackgroundRuns:
                     self.speculate()
         elif partial is not None:
             self.worker.publication.partial(partial, origin)
+
+    def _heard_complete(self, speculation: Speculation, audio: Audio, outcome: RecognitionOutcome) -> bool:
+        """Whether the audio says the turn is complete too, asked in free speech only where the text
+        is complete by itself (the turn cannot end otherwise), off the lock: a function of the audio
+        alone, like the text."""
+        if self.turn_heard is None or speculation.grammar is not None:
+            return True
+        if not self._speculation.text_complete(speculation, outcome):
+            return False
+        return self.turn_heard(audio)
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """A Stoppable engine's text of the utterance so far."""

@@ -107,10 +107,16 @@ class SpeechEventConfig:
     # engine (as the engine writes: Whisper's " Yes."). A grammar's phrases are published as it
     # spells them; /speechEvent/transcript carries the engine's writing either way.
     text_style: str = "robot"
+    # In free speech, what else the turn's end needs besides a complete text: none, or smart-turn
+    # (Smart Turn v3.2 hears in the audio that the turn is complete; speech_event/pipeline/
+    # smart_turn.py, from the pipecat-ai wheel). With smart-turn the turn ends at the end of speech
+    # in free speech too (end_of_speech, 0.3 s where it is not set), when both say it is complete.
+    turn_end_model: str = "none"
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
 TEXT_STYLES = ("robot", "engine")
+TURN_END_MODELS = ("none", "smart-turn")
 QUANTIZATIONS = ("none", "int8")
 # Partial results more often than this would only keep the worker busy: no one reads that fast.
 SHORTEST_PARTIAL_PERIOD = 0.1
@@ -252,6 +258,7 @@ _FORMAT = KeyValueFormat(
         "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
         "partial_period": seconds(0.0, 60.0),
         "text_style": KeyRule(choice(*TEXT_STYLES), " or ".join(TEXT_STYLES)),
+        "turn_end_model": KeyRule(choice(*TURN_END_MODELS), " or ".join(TURN_END_MODELS)),
         "end_of_speech": KeyRule(
             optional(number(float, 0.0, 60.0)),
             "a number of seconds from 0 (off) to 60, or nothing for 0.3 in grammar mode (Whisper, "

@@ -48,6 +48,7 @@ from speech_event.pipeline.recognition import Recognition
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionQueue
 from speech_event.pipeline.rejections import RejectionLog
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
+from speech_event.pipeline.smart_turn import turn_heard_for
 from speech_event.pipeline.validate import Rejection, validate_signal
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import (
@@ -117,9 +118,10 @@ class SpeechEventNode:
         self._enabled = True
         self._collecting_since: Optional[float] = None  # when the utterance being collected started
         chosen = end_of_speech_chosen(config)
+        turn_heard = turn_heard_for(config)
 
         def deciding() -> bool:  # whether the end of speech decides with the engine and grammar in use
-            return decides_at_end_of_speech(self._recognizer, self._grammar, chosen)
+            return decides_at_end_of_speech(self._recognizer, self._grammar, chosen, turn_heard is not None)
 
         self._end = EndOfTurn(config, deciding, lambda: not isinstance(self._recognizer, Stoppable))
         self._turn = TurnTaking(
@@ -140,7 +142,7 @@ class SpeechEventNode:
             self._queue, self._lock, worker, lambda: self._background.worker_free()
         )
         self._background = BackgroundRuns(
-            config, clock, self._lock, worker, self._turn, self._so_far, self._closed.idle
+            config, clock, self._lock, worker, self._turn, self._so_far, self._closed.idle, turn_heard
         )
         self.speculations: SpeculationCounts = self._background.speculations  # how speculation fared
         self.partials: PartialCounts = self._background.partials  # how partial results fared

@@ -135,9 +135,12 @@ class SpeculationRules:
             self.counts.used += 1
         return speculation
 
-    def finished(self, speculation: Speculation, outcome: RecognitionOutcome) -> Optional[RecognitionJob]:
+    def finished(
+        self, speculation: Speculation, outcome: RecognitionOutcome, heard_complete: bool = True
+    ) -> Optional[RecognitionJob]:
         """A speculation's recognition ended: the closed utterance whose result it is, or None
-        (cancelled, or the utterance is still being collected)."""
+        (cancelled, or the utterance is still being collected). ``heard_complete``: whether the
+        audio says the turn is complete too (turn_end_model; True without one)."""
         speculation.running = False
         if speculation.watchdog is not None:
             speculation.watchdog.cancel()
@@ -145,14 +148,18 @@ class SpeculationRules:
             self.counts.wasted_seconds += outcome.took
             return None
         speculation.outcome = outcome
-        transcript = proper_transcript(outcome.answer)
-        text = transcript.text if transcript is not None else ""
-        speculation.complete = is_complete(text, None, speculation.grammar is not None, self._answers)
+        speculation.complete = heard_complete and self.text_complete(speculation, outcome)
         job = speculation.adopted
         if job is not None:
             self.current = None
             self.counts.used += 1
         return job
+
+    def text_complete(self, speculation: Speculation, outcome: RecognitionOutcome) -> bool:
+        """Whether a speculation's text is complete by itself (no comparison with the one before)."""
+        transcript = proper_transcript(outcome.answer)
+        text = transcript.text if transcript is not None else ""
+        return is_complete(text, None, speculation.grammar is not None, self._answers)
 
     def ends_turn(self, speculation: Speculation) -> bool:
         """Whether a finished speculation, not adopted, is a complete answer (remembered for the
@@ -180,7 +187,9 @@ class SpeculationRules:
         return self.current is not None and self.current.adopted is job and self.current.running
 
 
-def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar], chosen: bool) -> bool:
+def decides_at_end_of_speech(
+    recognizer: Recognizer, grammar: Optional[Grammar], chosen: bool, hears_turn_end: bool = False
+) -> bool:
     """Whether a speculation with ``recognizer`` decides on the end of speech (end_of_turn.py).
 
     Left to its default (``chosen`` false): with a grammar in force, an engine that can be stopped
@@ -194,11 +203,13 @@ def decides_at_end_of_speech(recognizer: Recognizer, grammar: Optional[Grammar],
     utterance so far, and its text is never a closed sentence (it writes no punctuation), so the
     turn would end at the pause anyway; its free decoding of a command and a second of babble after
     it takes 2.1 s, and a decision at each end heard in it kept the text up to 15 s late
-    (bench/end_of_speech.py)."""
+    (bench/end_of_speech.py).
+    ``hears_turn_end`` (turn_end_model set): in free speech an engine that can be stopped decides
+    too, the turn ending only where the audio says it is complete as well (SpeculationRules)."""
     stoppable = isinstance(recognizer, Stoppable)
     if grammar is not None:
         return stoppable or chosen
-    return stoppable and chosen
+    return stoppable and (chosen or hears_turn_end)
 
 
 def complete_answers(setting: str) -> FrozenSet[str]:

@@ -1,0 +1,94 @@
+"""Smart Turn v3.2 on onnxruntime: whether a speaker's turn is complete, heard in the audio.
+
+The model is the ONNX file the ``pipecat-ai`` wheel ships
+(``pipecat/audio/turn/smart_turn/data/smart-turn-v3.2-cpu.onnx``, BSD 2-Clause, Daily); install the
+wheel with ``pip install --no-deps pipecat-ai``: this module finds the file without importing the
+package, whose Python code wants much that the robot does not. Its input is the last 8 s of the
+turn at 16 kHz, zero-padded at the front, normalised to zero mean and unit variance, as Whisper's
+80-band log-mel of that buffer (reflected at both ends; transformers' WhisperFeatureExtractor,
+which pipecat's ``_whisper_features.py`` vendors); its output the probability that the turn is
+complete, complete above 0.5 (as pipecat reads it).
+"""
+
+import importlib.util
+from pathlib import Path
+from typing import Callable, Optional
+
+import numpy as np
+
+from speech_event.config import SpeechEventConfig
+from speech_event.errors import ModelError
+from speech_event.pipeline.resample import resample
+from speech_event.recognizers.whisper.features import HOP, SAMPLE_RATE, window_log_mel
+
+MODEL_FILE = "smart-turn-v3.2-cpu.onnx"
+WINDOW_SAMPLES = 8 * SAMPLE_RATE
+FRAMES = WINDOW_SAMPLES // HOP
+MEL_BANDS = 80
+COMPLETE = 0.5
+_VARIANCE_FLOOR = 1e-7  # transformers' zero-mean unit-variance normalisation
+
+
+def smart_turn_model_path() -> Path:
+    """The ONNX file of the installed pipecat-ai wheel, or ModelError saying how to install it."""
+    spec = importlib.util.find_spec("pipecat")
+    origin = spec.origin if spec is not None else None
+    path = Path(origin).parent / "audio" / "turn" / "smart_turn" / "data" / MODEL_FILE if origin else None
+    if path is None or not path.is_file():
+        raise ModelError(
+            f"turn_end_model smart-turn needs Smart Turn v3.2's ONNX model ({MODEL_FILE}), shipped in "
+            "the pipecat-ai wheel: pip install --no-deps pipecat-ai (none of its dependencies is needed)"
+        )
+    return path
+
+
+def smart_turn_features(audio: np.ndarray) -> np.ndarray:
+    """[80, 800] features of the turn so far (16 kHz): its last 8 s, zeros before a shorter one."""
+    samples = np.asarray(audio, dtype=np.float32)[-WINDOW_SAMPLES:]
+    buffer = np.zeros(WINDOW_SAMPLES, dtype=np.float32)
+    buffer[WINDOW_SAMPLES - samples.size :] = samples
+    # in float32, as the reference normalises the padded buffer before the spectrum's float64
+    buffer = (buffer - buffer.mean()) / np.sqrt(buffer.var() + np.float32(_VARIANCE_FLOOR))
+    return window_log_mel(buffer, MEL_BANDS)
+
+
+class SmartTurn:
+    """Smart Turn's ONNX model on onnxruntime (CPU, one thread, as pipecat runs it): the
+    probability that the turn in 16 kHz audio is complete."""
+
+    def __init__(self, path: Optional[Path] = None) -> None:
+        import onnxruntime
+
+        path = smart_turn_model_path() if path is None else path
+        options = onnxruntime.SessionOptions()
+        options.log_severity_level = 3
+        # One thread: it runs on the recognition worker, beside the engine's own threads.
+        options.intra_op_num_threads = 1
+        options.inter_op_num_threads = 1
+        options.execution_mode = onnxruntime.ExecutionMode.ORT_SEQUENTIAL
+        try:
+            self._session = onnxruntime.InferenceSession(
+                str(path), options, providers=["CPUExecutionProvider"]
+            )
+        except Exception as problem:  # onnxruntime raises its own exception types
+            raise ModelError(f"{path}: onnxruntime cannot load Smart Turn: {problem}") from None
+
+    def completion(self, audio: np.ndarray) -> float:
+        """The probability that the turn so far (16 kHz ``audio``) is complete."""
+        features = smart_turn_features(audio)[None]
+        (probability,) = self._session.run(None, {"input_features": features})
+        return float(np.asarray(probability).reshape(-1)[0])
+
+    def complete(self, audio: np.ndarray) -> bool:
+        """Whether the turn so far is complete: completion() above 0.5."""
+        return self.completion(audio) > COMPLETE
+
+
+def turn_heard_for(config: SpeechEventConfig) -> Optional[Callable[[np.ndarray], bool]]:
+    """What the configuration's turn_end_model hears, for audio at its sample rate: whether the turn
+    is complete; None for none. ModelError when the model it names is not installed."""
+    if config.turn_end_model == "none":
+        return None
+    model = SmartTurn()
+    rate = config.sample_rate
+    return lambda audio: model.complete(resample(audio, rate, SAMPLE_RATE))

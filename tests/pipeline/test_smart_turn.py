@@ -1,0 +1,96 @@
+"""Smart Turn v3.2 (speech_event/pipeline/smart_turn.py): its features against pipecat's own
+``_whisper_features.py`` on the same audio, and what it hears at the ends of LJ Speech's readings."""
+
+import importlib.util
+import types
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fixtures.noises import at_level, read_audio
+from fixtures.recordings import ljspeech
+from speech_event.config import SpeechEventConfig, parse_config
+from speech_event.errors import ConfigError, ModelError
+from speech_event.pipeline.smart_turn import (
+    WINDOW_SAMPLES,
+    SmartTurn,
+    smart_turn_features,
+    turn_heard_for,
+)
+from speech_event.recognizers.whisper.features import SAMPLE_RATE
+
+# The readings that end a sentence (the others stop mid-sentence: LJ Speech cuts the book's
+# sentences into pieces).
+ENDS_A_SENTENCE = ("LJ001-0002", "LJ001-0005", "LJ001-0008")
+
+
+def pipecats_features() -> types.ModuleType:
+    """pipecat's numpy Whisper features, read from the installed wheel's file (importing pipecat
+    itself would want its dependencies)."""
+    spec = importlib.util.find_spec("pipecat")
+    assert spec is not None and spec.origin is not None, "the test env installs pipecat-ai --no-deps"
+    path = Path(spec.origin).parent / "audio" / "turn" / "smart_turn" / "_whisper_features.py"
+    loaded = importlib.util.spec_from_file_location("pipecat_whisper_features", path)
+    assert loaded is not None and loaded.loader is not None
+    module = importlib.util.module_from_spec(loaded)
+    loaded.loader.exec_module(module)
+    return module
+
+
+def as_pipecat_pads(audio: np.ndarray) -> np.ndarray:
+    """The last 8 s, zeros before (local_smart_turn_v3.py's truncate_audio_to_last_n_seconds)."""
+    last = np.asarray(audio, dtype=np.float32)[-WINDOW_SAMPLES:]
+    return np.pad(last, (WINDOW_SAMPLES - last.size, 0))
+
+
+def test_the_features_are_pipecats_on_speech_noise_and_a_turn_longer_than_the_window() -> None:
+    reference = pipecats_features()
+    rng = np.random.default_rng(zlib.crc32(b"smart turn"))
+    readings = [read_audio(recording.path, SAMPLE_RATE) for recording in ljspeech()]
+    clips = [
+        *readings,
+        at_level("pink", 3 * SAMPLE_RATE, -40.0, SAMPLE_RATE, rng),
+        np.concatenate(readings[:3]),  # over 8 s: its last 8 s
+        np.zeros(SAMPLE_RATE, dtype=np.float32),
+    ]
+    assert np.concatenate(readings[:3]).size > WINDOW_SAMPLES
+    for audio in clips:
+        ours = smart_turn_features(audio)
+        theirs = reference.compute_whisper_log_mel_features(as_pipecat_pads(audio), do_normalize=True)
+        assert ours.shape == theirs.shape == (80, 800)
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-5)
+
+
+def test_it_hears_the_readings_that_end_a_sentence_complete_and_the_others_not() -> None:
+    model = SmartTurn()
+    for recording in ljspeech():
+        completion = model.completion(read_audio(recording.path, SAMPLE_RATE))
+        # at the sentence ends 0.97 to 0.99, elsewhere 0.25 at most: none near 0.5
+        assert model.complete(read_audio(recording.path, SAMPLE_RATE)) == (
+            recording.path.stem in ENDS_A_SENTENCE
+        ), (recording.path.stem, completion)
+
+
+def test_the_turn_heard_for_a_configuration_resamples_its_audio() -> None:
+    assert turn_heard_for(SpeechEventConfig()) is None
+    heard = turn_heard_for(SpeechEventConfig(turn_end_model="smart-turn", sample_rate=48000))
+    assert heard is not None
+    for recording in ljspeech():
+        assert heard(read_audio(recording.path, 48000)) == (recording.path.stem in ENDS_A_SENTENCE)
+
+
+def test_without_pipecat_the_message_says_how_to_install_the_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(ModelError) as error:
+        turn_heard_for(SpeechEventConfig(turn_end_model="smart-turn"))
+    assert "pip install --no-deps pipecat-ai" in str(error.value)
+    assert "smart-turn-v3.2-cpu.onnx" in str(error.value)
+
+
+def test_the_key_takes_none_or_smart_turn_and_says_so() -> None:
+    assert parse_config("turn_end_model smart-turn").turn_end_model == "smart-turn"
+    with pytest.raises(ConfigError) as error:
+        parse_config("turn_end_model silero", "f.ini")
+    assert str(error.value).endswith("none or smart-turn")

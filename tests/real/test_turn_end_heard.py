@@ -1,0 +1,86 @@
+"""Free speech with turn_end_model smart-turn, on trained weights (Whisper tiny.en) and LJ Speech's
+readings: the turn ends at the end of speech when both the text and Smart Turn say it is complete,
+and waits for the pause when the audio says the reader is not done, whatever Whisper writes; the
+same audio gives the same texts however long the engine takes (the node holds the blocks that
+come while a decision is pending)."""
+
+from typing import Any, Dict, List, Tuple
+
+import pytest
+
+from fixtures.recordings import LJSPEECH
+from harness.memory_runner import run_in_memory
+from harness.scenario import parse_scenario
+from speech_event.config import SpeechEventConfig
+from tests.helpers.paths import ROOT
+
+PAUSE = 1.5  # speech_pause_period
+
+
+def published(
+    steps: List[Dict[str, Any]], config: Dict[str, Any], recognition_seconds: float = 0.0
+) -> List[Tuple[float, str]]:
+    """What the node publishes for ``steps`` in free speech on tiny.en, with its scenario times."""
+    document = {
+        "name": "turn end",
+        "recognizer": "whisper-tiny.en",
+        "config": {"partial_period": 0.0, **config},
+        "steps": steps,
+        "expect": {"published": []},
+    }
+    scenario = parse_scenario(document, str(ROOT / "turn_end.toml"), SpeechEventConfig())
+    return [(item.time, item.text) for item in run_in_memory(scenario, recognition_seconds).published]
+
+
+def reading(stem: str) -> Dict[str, Any]:
+    return {"play": str(LJSPEECH / f"{stem}.wav")}
+
+
+SMART_TURN = {"turn_end_model": "smart-turn"}
+
+
+def test_a_reading_that_ends_a_sentence_is_published_at_the_end_of_speech_not_after_the_pause() -> None:
+    steps = [reading("LJ001-0002"), {"silence": 3.0}]
+    [(heard_at, heard)] = published(steps, SMART_TURN)
+    [(paused_at, paused)] = published(steps, {})
+    assert heard == paused
+    # the pause ends 1.5 s after the last block; the end of speech 0.3 s after it, decided then
+    assert paused_at - heard_at > PAUSE - 0.5
+
+
+def test_a_reading_that_stops_mid_sentence_waits_for_the_pause_with_smart_turn_but_not_on_its_text_alone() -> (
+    None
+):
+    # LJ001-0004 stops mid-sentence (Smart Turn: 0.01), and Whisper closes it with a period anyway
+    steps = [reading("LJ001-0004"), {"silence": 3.0}]
+    [(heard_at, heard)] = published(steps, SMART_TURN)
+    [(paused_at, paused)] = published(steps, {})
+    [(text_at, text)] = published(steps, {"end_of_speech": 0.3})
+    assert heard == paused == text
+    assert heard_at == paused_at
+    assert paused_at - text_at > PAUSE - 0.5
+
+
+def test_a_reader_who_pauses_mid_sentence_is_not_cut_off_where_the_text_alone_would_cut() -> None:
+    # the first reading stops mid-sentence, and the second goes on after half a second
+    steps = [reading("LJ001-0004"), {"silence": 0.5}, reading("LJ001-0002"), {"silence": 3.0}]
+    assert len(published(steps, SMART_TURN)) == 1
+    assert len(published(steps, {"end_of_speech": 0.3})) == 2
+
+
+@pytest.mark.parametrize("recognition_seconds", [0.5, 2.0])
+def test_the_same_audio_gives_the_same_texts_at_the_same_ends_however_slow_the_engine(
+    recognition_seconds: float,
+) -> None:
+    steps = [
+        reading("LJ001-0004"),
+        {"silence": 0.5},
+        reading("LJ001-0002"),
+        {"silence": 3.0},
+        reading("LJ001-0008"),
+        {"silence": 3.0},
+    ]
+    quick = published(steps, SMART_TURN)
+    slow = published(steps, SMART_TURN, recognition_seconds)
+    assert [text for _, text in slow] == [text for _, text in quick]
+    assert len(quick) == 2
