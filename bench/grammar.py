@@ -171,6 +171,11 @@ class NodeRun:
 
     def say(self, audio: np.ndarray) -> str:
         """What the node publishes for ``audio`` (at RATE): a text, or SPEECH_NOT_RECOGNIZED."""
+        said = self.heard(audio)
+        return said[0] if said else SPEECH_NOT_RECOGNIZED
+
+    def heard(self, audio: np.ndarray) -> List[str]:
+        """Every text the node publishes for ``audio`` (at RATE), which may be cut in utterances."""
         before = len(self._texts)
         start = self._clock.now()
         padded = np.concatenate([audio, np.zeros(-audio.size % BLOCK, np.float32)])
@@ -178,8 +183,7 @@ class NodeRun:
             self._clock.advance_to(start + (index + BLOCK) / RATE)
             self._signal.publish(Float32MultiArray(data=padded[index : index + BLOCK]))
         self._clock.advance(self._pause + 0.5)
-        said = self._texts[before:]
-        return said[0] if said else SPEECH_NOT_RECOGNIZED
+        return self._texts[before:]
 
 
 def decision(engine: Recognizer) -> Dict[str, object]:

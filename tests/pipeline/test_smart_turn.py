@@ -2,14 +2,13 @@
 ``_whisper_features.py`` on the same audio, and what it hears at the ends of LJ Speech's readings."""
 
 import importlib.util
-import types
 import zlib
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fixtures.noises import at_level, read_audio
+from fixtures.pipecat_smart_turn import as_pipecat_pads, pipecats_features
 from fixtures.recordings import ljspeech
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError, ModelError
@@ -24,25 +23,6 @@ from speech_event.recognizers.whisper.features import SAMPLE_RATE
 # The readings that end a sentence (the others stop mid-sentence: LJ Speech cuts the book's
 # sentences into pieces).
 ENDS_A_SENTENCE = ("LJ001-0002", "LJ001-0005", "LJ001-0008")
-
-
-def pipecats_features() -> types.ModuleType:
-    """pipecat's numpy Whisper features, read from the installed wheel's file (importing pipecat
-    itself would want its dependencies)."""
-    spec = importlib.util.find_spec("pipecat")
-    assert spec is not None and spec.origin is not None, "the test env installs pipecat-ai --no-deps"
-    path = Path(spec.origin).parent / "audio" / "turn" / "smart_turn" / "_whisper_features.py"
-    loaded = importlib.util.spec_from_file_location("pipecat_whisper_features", path)
-    assert loaded is not None and loaded.loader is not None
-    module = importlib.util.module_from_spec(loaded)
-    loaded.loader.exec_module(module)
-    return module
-
-
-def as_pipecat_pads(audio: np.ndarray) -> np.ndarray:
-    """The last 8 s, zeros before (local_smart_turn_v3.py's truncate_audio_to_last_n_seconds)."""
-    last = np.asarray(audio, dtype=np.float32)[-WINDOW_SAMPLES:]
-    return np.pad(last, (WINDOW_SAMPLES - last.size, 0))
 
 
 def test_the_features_are_pipecats_on_speech_noise_and_a_turn_longer_than_the_window() -> None:
