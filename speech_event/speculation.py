@@ -81,6 +81,8 @@ class SpeculationRules:
     def __init__(self, config: SpeechEventConfig) -> None:
         self._wanted = config.speculative_recognition
         self._answers = complete_answers(config.complete_answers)
+        # turn_end_text false: in free speech any text is complete, and the turn-end model decides
+        self._audio_alone = config.turn_end_model != "none" and not config.turn_end_text
         self.counts = SpeculationCounts()
         self.current: Optional[Speculation] = None
         self._last_text: Optional[str] = None  # the text of this utterance's last speculation
@@ -156,10 +158,23 @@ class SpeculationRules:
         return job
 
     def text_complete(self, speculation: Speculation, outcome: RecognitionOutcome) -> bool:
-        """Whether a speculation's text is complete by itself (no comparison with the one before)."""
+        """Whether a speculation's text is complete by itself (no comparison with the one before); with
+        the audio alone deciding in free speech (turn_end_text false), any text."""
         transcript = proper_transcript(outcome.answer)
         text = transcript.text if transcript is not None else ""
+        if self._audio_alone and speculation.grammar is None:
+            return bool(text.strip())
         return is_complete(text, None, speculation.grammar is not None, self._answers)
+
+    def needs_the_audio(self, speculation: Speculation, outcome: RecognitionOutcome) -> bool:
+        """Whether the turn-end model must hear the turn complete too: in free speech, where the text
+        is complete but is not one of complete_answers (an answer the robot waits for ends the turn
+        at once: the model scores a word said alone either way)."""
+        if speculation.grammar is not None or not self.text_complete(speculation, outcome):
+            return False
+        transcript = proper_transcript(outcome.answer)
+        text = transcript.text if transcript is not None else ""
+        return text.strip(" .?!").lower() not in self._answers
 
     def ends_turn(self, speculation: Speculation) -> bool:
         """Whether a finished speculation, not adopted, is a complete answer (remembered for the

@@ -92,14 +92,14 @@ def test_the_robot_camel_case_keys_are_aliases() -> None:
             "f.ini:1: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are "
             "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, "
             "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
-            "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, end_of_speech",
+            "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, turn_end_text, end_of_speech",
         ),
         (
             "samplerate 16000",
             "f.ini:1: unknown key 'samplerate': did you mean 'sample_rate'? known keys are "
             "language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, "
             "speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, "
-            "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, end_of_speech",
+            "max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, turn_end_text, end_of_speech",
         ),
     ],
 )

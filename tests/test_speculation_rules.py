@@ -476,3 +476,61 @@ def test_a_speculation_that_does_not_count_leaves_the_comparison_as_it_was() -> 
 
 def test_counts_start_at_zero() -> None:
     assert SpeculationRules(CONFIG).counts == SpeculationCounts(started=0, used=0, wasted_seconds=0.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "grammar", "by_text", "by_audio_alone"),
+    [
+        ("Go to the", None, False, True),
+        ("Go to the kitchen.", None, True, True),
+        ("", None, False, False),
+        ("go to the kitchen", COMMANDS, True, True),
+    ],
+)
+def test_with_the_audio_alone_deciding_any_text_of_free_speech_is_complete_for_the_model_to_judge(
+    text: str, grammar: Optional[Grammar], by_text: bool, by_audio_alone: bool
+) -> None:
+    outcome = RecognitionOutcome(Transcript(text, None))
+    heard = dataclasses.replace(CONFIG, turn_end_model="smart-turn")
+    for config, complete in (
+        (CONFIG, by_text),
+        (heard, by_text),
+        (dataclasses.replace(heard, turn_end_text=False), by_audio_alone),
+    ):
+        speculation = Speculation(16000, StoppableRecognizer(), grammar)
+        assert SpeculationRules(config).text_complete(speculation, outcome) == complete
+        rules = SpeculationRules(config)
+        started = rules.start(16000, StoppableRecognizer(), grammar)
+        rules.finished(started, outcome, heard_complete=False)
+        assert not started.complete  # the audio says the turn goes on
+        rules = SpeculationRules(config)
+        started = rules.start(16000, StoppableRecognizer(), grammar)
+        rules.finished(started, outcome, heard_complete=True)
+        assert started.complete == complete
+
+
+def test_in_free_speech_a_stoppable_engine_decides_at_the_end_of_speech_where_a_turn_end_model_hears() -> (
+    None
+):
+    assert decides_at_end_of_speech(StoppableRecognizer(), None, chosen=False, hears_turn_end=True)
+    assert not decides_at_end_of_speech(SpyRecognizer(), None, chosen=False, hears_turn_end=True)
+    # in grammar mode the model changes nothing: pocketsphinx still decides only when chosen
+    assert not decides_at_end_of_speech(SpyRecognizer(), COMMANDS, chosen=False, hears_turn_end=True)
+
+
+@pytest.mark.parametrize(
+    ("text", "grammar", "needed"),
+    [
+        ("Go to the kitchen.", None, True),  # a closed sentence: the audio must agree
+        ("Yes.", None, False),  # one of complete_answers ends the turn at once
+        ("no", None, False),
+        ("Go to the", None, False),  # the text is not complete: the turn cannot end anyway
+        ("go to the kitchen", COMMANDS, False),  # a grammar's phrase decides alone
+    ],
+)
+def test_the_turn_end_model_is_asked_only_where_a_complete_text_of_free_speech_is_no_answer(
+    text: str, grammar: Optional[Grammar], needed: bool
+) -> None:
+    rules = SpeculationRules(dataclasses.replace(CONFIG, turn_end_model="smart-turn"))
+    speculation = Speculation(16000, StoppableRecognizer(), grammar)
+    assert rules.needs_the_audio(speculation, RecognitionOutcome(Transcript(text, None))) == needed

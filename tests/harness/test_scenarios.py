@@ -107,7 +107,7 @@ MINIMAL: Dict[str, Any] = {"name": "n", "steps": [{"say": "hi"}], "expect": {"pu
         ({"voice": "robot"}, "s.toml: 'voice' = 'robot' is not allowed; allowed: tones, tts, slt, kal, ked"),
         (
             {"config": {"speech_pause": 1}},
-            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, end_of_speech",
+            "s.toml: [config]: unknown key 'speech_pause': did you mean 'speech_pause_period'? known keys are language, verbose_mode, rw_model_path, en_model_path, audio_storage_dir, audio_storage_max_mb, cuda, quantization, sample_rate, speech_pause_period, max_utterance_length, health_check_period, publish_unrecognized, max_message_length, confidence, heartbeat_msg_period, grammar, grammar_threshold, pocketsphinx_keywords, model, min_utterance_length, vad_threshold, max_backlog, recognition_timeout, speculative_recognition, speculation_gap, early_pause, complete_answers, partial_period, text_style, turn_end_model, turn_end_text, end_of_speech",
         ),
         ({"expect": {"published": [1]}}, "s.toml: [expect]: 'published' must be a list of strings"),
     ],

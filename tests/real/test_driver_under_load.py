@@ -158,3 +158,16 @@ def test_the_tones_engines_give_the_same_texts_in_every_run(tmp_path: Path, reco
         _side_by_side(tmp_path, said, _three_runs(recognizer, "publish_unrecognized true\n"))
     )
     assert len(texts) == len(said)
+
+
+def test_with_smart_turn_deciding_the_same_readings_give_the_same_texts_in_every_run(tmp_path: Path) -> None:
+    # LJ Speech's readings, pauses inside them: where the turn ends depends on the audio alone
+    # (the text and Smart Turn of the same samples), not on how late the worker is
+    heard = "turn_end_model smart-turn\n"
+    runs = {
+        "smart-turn 1": ("whisper-tiny.en", heard),
+        "smart-turn 2": ("whisper-tiny.en", heard),
+        "smart-turn no partials": ("whisper-tiny.en", heard + NO_PARTIALS),
+    }
+    texts = _same_in_every_run(_side_by_side(tmp_path, recordings.ljspeech(), runs))
+    assert len(texts) >= len(recordings.ljspeech())

@@ -84,3 +84,14 @@ def test_the_same_audio_gives_the_same_texts_at_the_same_ends_however_slow_the_e
     slow = published(steps, SMART_TURN, recognition_seconds)
     assert [text for _, text in slow] == [text for _, text in quick]
     assert len(quick) == 2
+
+
+def test_with_the_audio_alone_deciding_smart_turn_ends_the_sentence_and_waits_mid_sentence() -> None:
+    audio_alone = {**SMART_TURN, "turn_end_text": False}
+    # (LJ001-0002 it cuts after its first two words, "in being": the text rule is what stops that)
+    for stem, ends_early in (("LJ001-0008", True), ("LJ001-0004", False)):
+        steps = [reading(stem), {"silence": 3.0}]
+        [(heard_at, heard)] = published(steps, audio_alone)
+        [(paused_at, paused)] = published(steps, {})
+        assert heard == paused
+        assert (paused_at - heard_at > PAUSE - 0.5) == ends_early, stem
