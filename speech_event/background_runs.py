@@ -35,6 +35,7 @@ from speech_event.grammar import Grammar
 from speech_event.partials import PartialCounts, PartialFeed, PartialRules
 from speech_event.pipeline.publication import TextOrigin
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.pipeline.smart_turn import TurnHeard
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Clock, Incremental, Recognizer, Stoppable, Transcript
 from speech_event.speculation import (
@@ -94,7 +95,7 @@ class BackgroundRuns:
     worker_idle: Callable[[], bool]  # no closed utterance is being recognized or waits for it
     # turn_end_model: whether the audio of the utterance so far says the turn is complete (free
     # speech); None: the text alone decides.
-    turn_heard: Optional[Callable[[Audio], bool]] = None
+    turn_heard: Optional[TurnHeard] = None
     speculations: SpeculationCounts = field(init=False)  # how speculation fared
     partials: PartialCounts = field(init=False)  # how partial results fared
 
@@ -193,6 +194,7 @@ class BackgroundRuns:
         self._partials.drop()  # a speculation comes before a partial: it may be the final text
         audio = so_far.audio()[: so_far.cut]
         speculation = self._speculation.start(audio.size, so_far.recognizer, so_far.grammar)
+        speculation.at_last_block = audio.size == so_far.samples
         job = functools.partial(self._speculated, speculation, audio, so_far.origin)
         speculation.handle = self.worker.executor.submit(job)
 
@@ -254,7 +256,7 @@ class BackgroundRuns:
         the audio alone, like the text."""
         if self.turn_heard is None or not self._speculation.needs_the_audio(speculation, outcome):
             return True
-        return self.turn_heard(audio)
+        return self.turn_heard(audio, speculation.at_last_block)
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """A Stoppable engine's text of the utterance so far."""

@@ -53,6 +53,9 @@ class Speculation:
         # Whether its text is complete by itself (no comparison with the speculation before it,
         # which depends on which speculations ran): what a decision on the end of speech takes.
         self.complete = False
+        # Whether its audio ends at the last block that came (a pause of the gate follows, in no
+        # samples), not at a cut inside the samples: what a turn-end model is told.
+        self.at_last_block = True
 
     def is_for(self, job: RecognitionJob) -> bool:
         """Whether a closed utterance is exactly the audio this speculation transcribes, for the

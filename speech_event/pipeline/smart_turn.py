@@ -26,6 +26,16 @@ WINDOW_SAMPLES = 8 * SAMPLE_RATE
 FRAMES = WINDOW_SAMPLES // HOP
 MEL_BANDS = 80
 COMPLETE = 0.5
+# pipecat asks once its VAD has heard 0.2 s without speech, which the turn then ends with. The
+# robot's gate sends no blocks in a pause: a turn that ends at its last block ends mid-sound to the
+# model ("stop", "turn left": 0.07 to 0.09 as slt says them; with 0.2 s of silence 0.87 to 0.95).
+# Such a turn is topped up with silence to end in that much quiet (30 dB under its loudest 20 ms):
+# the node decides only once the pause has lasted that long. A turn cut in its samples ends in
+# the pause as heard already; more silence would tip a reader's pause inside a word to
+# "complete" (LJ001-0008's "surpassed").
+HEARD_PAUSE = int(0.2 * SAMPLE_RATE)
+QUIET_FRAME = SAMPLE_RATE // 50
+QUIET = 1e-3
 _VARIANCE_FLOOR = 1e-7  # transformers' zero-mean unit-variance normalisation
 
 
@@ -79,16 +89,32 @@ class SmartTurn:
         (probability,) = self._session.run(None, {"input_features": features})
         return float(np.asarray(probability).reshape(-1)[0])
 
-    def complete(self, audio: np.ndarray) -> bool:
-        """Whether the turn so far is complete: completion() above 0.5."""
-        return self.completion(audio) > COMPLETE
+    def complete(self, audio: np.ndarray, paused: bool = False) -> bool:
+        """Whether the turn so far is complete: completion() above 0.5; ``paused``: the pause came as
+        no blocks after ``audio`` (the robot's gate), which then ends in it (with_pause)."""
+        return self.completion(with_pause(audio) if paused else audio) > COMPLETE
 
 
-def turn_heard_for(config: SpeechEventConfig) -> Optional[Callable[[np.ndarray], bool]]:
-    """What the configuration's turn_end_model hears, for audio at its sample rate: whether the turn
-    is complete; None for none. ModelError when the model it names is not installed."""
+def with_pause(audio: np.ndarray) -> np.ndarray:
+    """16 kHz ``audio`` followed by silence, so that it ends in HEARD_PAUSE of quiet."""
+    samples = np.asarray(audio, dtype=np.float32)
+    whole = samples[samples.size % QUIET_FRAME :].astype(np.float64)
+    energies = np.mean(np.square(whole).reshape(-1, QUIET_FRAME), axis=1) if whole.size else np.zeros(0)
+    loud = np.flatnonzero(energies >= energies.max() * QUIET) if energies.size else np.zeros(0, int)
+    quiet = (energies.size - 1 - int(loud[-1])) * QUIET_FRAME if loud.size else samples.size
+    return np.concatenate([samples, np.zeros(max(0, HEARD_PAUSE - quiet), np.float32)])
+
+
+# The turn so far at the configuration's sample rate, and whether its pause came as no blocks ->
+# whether the turn is complete.
+TurnHeard = Callable[[np.ndarray, bool], bool]
+
+
+def turn_heard_for(config: SpeechEventConfig) -> Optional[TurnHeard]:
+    """What the configuration's turn_end_model hears (SmartTurn.complete); None for none.
+    ModelError when the model it names is not installed."""
     if config.turn_end_model == "none":
         return None
     model = SmartTurn()
     rate = config.sample_rate
-    return lambda audio: model.complete(resample(audio, rate, SAMPLE_RATE))
+    return lambda audio, paused: model.complete(resample(audio, rate, SAMPLE_RATE), paused)
