@@ -19,11 +19,10 @@ import numpy as np
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.pipeline.resample import resample
-from speech_event.recognizers.whisper.features import HOP, SAMPLE_RATE, window_log_mel
+from speech_event.recognizers.whisper.features import SAMPLE_RATE, window_log_mel
 
 MODEL_FILE = "smart-turn-v3.2-cpu.onnx"
 WINDOW_SAMPLES = 8 * SAMPLE_RATE
-FRAMES = WINDOW_SAMPLES // HOP
 MEL_BANDS = 80
 COMPLETE = 0.5
 # pipecat asks once its VAD has heard 0.2 s without speech, which the turn then ends with. The
