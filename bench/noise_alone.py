@@ -37,7 +37,7 @@ def main() -> None:
                 for level in LEVELS:
                     rng = np.random.default_rng(zlib.crc32(f"{kind}{level}".encode()))
                     texts = run.heard(at_level(kind, round(arguments.seconds * RATE), level, RATE, rng))
-                    concluded = [conclusion(text) for text in texts if conclusion(text) != NOTHING]
+                    concluded = [found for found in map(conclusion, texts) if found != NOTHING]
                     print(
                         f"  {kind:<7} {level:>4.0f} dBFS  {texts!r}  the robot concludes {concluded}",
                         flush=True,

@@ -163,8 +163,7 @@ class SpeculationRules:
     def text_complete(self, speculation: Speculation, outcome: RecognitionOutcome) -> bool:
         """Whether a speculation's text is complete by itself (no comparison with the one before); with
         the audio alone deciding in free speech (turn_end_text false), any text."""
-        transcript = proper_transcript(outcome.answer)
-        text = transcript.text if transcript is not None else ""
+        text = speculated_text(outcome)
         if self._audio_alone and speculation.grammar is None:
             return bool(text.strip())
         return is_complete(text, None, speculation.grammar is not None, self._answers)
@@ -175,9 +174,7 @@ class SpeculationRules:
         at once: the model scores a word said alone either way)."""
         if speculation.grammar is not None or not self.text_complete(speculation, outcome):
             return False
-        transcript = proper_transcript(outcome.answer)
-        text = transcript.text if transcript is not None else ""
-        return text.strip(" .?!").lower() not in self._answers
+        return speculated_text(outcome).strip(" .?!").lower() not in self._answers
 
     def ends_turn(self, speculation: Speculation) -> bool:
         """Whether a finished speculation, not adopted, is a complete answer (remembered for the
@@ -186,8 +183,7 @@ class SpeculationRules:
         the speculation before it on this utterance."""
         if speculation.cancelled or speculation.adopted is not None or speculation.outcome is None:
             return False
-        transcript = proper_transcript(speculation.outcome.answer)  # None: a failed recognition
-        text = transcript.text if transcript is not None else ""
+        text = speculated_text(speculation.outcome)
         complete = is_complete(text, self._last_text, speculation.grammar is not None, self._answers)
         self._last_text = text.strip().lower()  # as is_complete compares it
         return complete
@@ -203,6 +199,12 @@ class SpeculationRules:
     def running_for(self, job: RecognitionJob) -> bool:
         """Whether ``job``'s recognition is a speculation that runs now."""
         return self.current is not None and self.current.adopted is job and self.current.running
+
+
+def speculated_text(outcome: RecognitionOutcome) -> str:
+    """The text of a speculation's outcome; "" for a failed recognition."""
+    transcript = proper_transcript(outcome.answer)
+    return transcript.text if transcript is not None else ""
 
 
 def decides_at_end_of_speech(
