@@ -422,6 +422,28 @@ def played_on_fake_clock(
     return [text for _, text in heard], node
 
 
+def played_in_real_time(
+    engine: Recognizer,
+    config: SpeechEventConfig,
+    blocks: Sequence[Tuple[float, np.ndarray]],
+    grammar: str = "",
+) -> Tuple[List[str], SpeechEventNode]:
+    """The texts the node publishes, and the node, for ``blocks`` (when each is complete, in seconds
+    from the start; the block at RATE) sent at their times on the wall clock, with the thread
+    executor: a block stops the speculation it makes worthless, as on the robot."""
+    executor = ThreadExecutor()
+    node, bus, heard, _ = _node(config, engine, SystemClock(), executor, grammar)
+    sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
+    began = time.monotonic()
+    for when, block in blocks:
+        time.sleep(max(0.0, began + when - time.monotonic()))
+        sound_detection.publish(Float32MultiArray(data=block))
+    time.sleep(config.speech_pause_period + 0.5)
+    executor.shutdown(30.0)  # every recognition handed over ends
+    node.stop()
+    return [text for _, text in heard], node
+
+
 def texts_on_fake_clock(
     engine: Recognizer, config: SpeechEventConfig, audio: np.ndarray, grammar: str = ""
 ) -> List[str]:
@@ -521,7 +543,7 @@ def gated(voice: np.ndarray) -> List[Tuple[float, np.ndarray]]:
     ]
 
 
-def _after_each_other(blocks: Sequence[Tuple[float, np.ndarray]]) -> List[Tuple[float, np.ndarray]]:
+def after_each_other(blocks: Sequence[Tuple[float, np.ndarray]]) -> List[Tuple[float, np.ndarray]]:
     """``gated`` blocks as steps: the seconds since the one before, then the block."""
     times = [0.0] + [when for when, _ in blocks]
     return [(when - before, block) for before, (when, block) in zip(times, blocks)]
@@ -546,7 +568,7 @@ def measure_gate_speculation(
         seconds += len(blocks) * BLOCK / RATE
         texts = {}
         for label, config in configs.items():
-            texts[label], node = played_on_fake_clock(engine, config, _after_each_other(blocks), grammar)
+            texts[label], node = played_on_fake_clock(engine, config, after_each_other(blocks), grammar)
             started[label] += node.speculations.started
             used[label] += node.speculations.used
             split[label] += len(texts[label]) > 1
