@@ -178,7 +178,7 @@ def test_a_score_below_the_least_deciding_one_may_be_any_bound_of_it_and_the_cho
     evidence: Dict[str, float],
     raised: float,
 ) -> None:
-    """What lets Whisper score only the phrases that can decide (forced.score_phrases_that_decide):
+    """What lets Whisper score only the phrases that can decide (phrase_tree.score_phrases_that_decide):
     a phrase below ``least_deciding_score`` and below the best phrase may be given any upper bound
     of its score under both, and the phrases taken, the candidates for the evidence and the phrase
     named when none is taken are the same."""

@@ -60,37 +60,6 @@ def score_phrases(
     return scores
 
 
-def score_phrases_that_decide(
-    session: Decoding,
-    prompt: Sequence[int],
-    sequences: Sequence[Sequence[int]],
-    manifest: WhisperManifest,
-    prompted: np.ndarray,
-    least: float,
-    always: Sequence[int] = (),
-) -> List[float]:
-    """``score_phrases``, exact where a grammar decision needs it: every sequence that scores
-    ``least`` or more, the best one, and those at the indexes ``always``. Each other sequence gets
-    the log-probability of its first token (eot for an empty one) after the prompt, an upper bound
-    of its score (every later token's log-probability is at most 0), below ``least`` and at most the
-    best's score. Sequences are scored in the order of that bound, so those that cannot reach
-    ``least`` cost no decoder call: for a command, what the model wrote first rules out most of the
-    other commands' forms. ``prompted`` holds the prompt's logits (``session`` has run it)."""
-    first = log_softmax(whisper_logits(prompted[-1], True, manifest))
-    scores = [float(first[(tokens or [manifest.eot])[0]]) for tokens in sequences]
-    scored = set()
-    best = -np.inf
-    for index in [*always, *sorted(range(len(sequences)), key=lambda index: -scores[index])]:
-        if index in scored:
-            continue
-        if index not in always and scores[index] < least and scores[index] <= best:
-            break  # so is every bound after it
-        scores[index] = score_phrases(session, prompt, [sequences[index]], manifest, prompted)[0]
-        scored.add(index)
-        best = max(best, scores[index])
-    return scores
-
-
 class UnheardScores:
     """Token sequences' ``forced_log_likelihood`` after ``prompt`` with silence for audio: the
     model's prior for a text, high for what it expects when nothing is said (tiny.en writes " you"

@@ -14,7 +14,8 @@ robot's node reports it. A language with no token in the model directory's confi
 has none for Kinyarwanda) is refused when the engine is built.
 
 With a grammar in force: the free greedy decoding, then each phrase that can decide scored by
-teacher forcing (forced.py; the others bounded by their first token) in the forms Whisper writes
+teacher forcing (forced.py) along the forms' prefix tree (phrase_tree.py: the others bounded by
+the prefix that rules them out) in the forms Whisper writes
 it (written_forms.py: its usual ones, and for a phrase the free text may be a mishearing of, the
 phrase in the free text's punctuation), each form in the tokens Whisper's tokenizer gives it
 (tokenizer.py); the phrase the free text's words take (the free text, or the phrase it is a
@@ -45,10 +46,11 @@ from speech_event.recognizers.onnx.grammar_choice import (
 )
 from speech_event.recognizers.onnx.session import StoppableRuns
 from speech_event.recognizers.whisper.features import CHUNK_SAMPLES, SAMPLE_RATE, whisper_log_mel
-from speech_event.recognizers.whisper.forced import UnheardScores, score_phrases_that_decide
+from speech_event.recognizers.whisper.forced import UnheardScores
 from speech_event.recognizers.whisper.greedy import WhisperResult, whisper_greedy
 from speech_event.recognizers.whisper.layouts import load_whisper_directory
 from speech_event.recognizers.whisper.manifest import MANIFEST_FILE, text_of
+from speech_event.recognizers.whisper.phrase_tree import score_phrases_that_decide
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
 from speech_event.recognizers.whisper.written_forms import phrase_as_written, phrase_variants
 from speech_event.spelling import spelt

@@ -30,13 +30,11 @@ from speech_event.recognizers.whisper.forced import (
     UnheardScores,
     forced_log_likelihood,
     score_phrases,
-    score_phrases_that_decide,
 )
 from speech_event.recognizers.whisper.greedy import whisper_greedy
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.model import DECODER_FILE, DecoderSession, WhisperModel
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
-from tests.helpers.recorded_decoding import RecordedDecoding
 
 RATE = 16000
 PROMPT = MANIFEST.prompt("english")
@@ -193,51 +191,6 @@ def test_a_token_whispers_rules_rule_out_scores_minus_infinity(tones_model: Whis
         DecoderSession(tones_model, cross), PROMPT, [[*go, NO_SPEECH, *left], [SOT, *go], []], MANIFEST
     )
     assert scores == [-np.inf, -np.inf, -np.inf]  # suppressed anywhere; eot at the first position
-
-
-@pytest.mark.parametrize(
-    "least, bounded",
-    [
-        (-8.0, [" stop", " stop stop", " left"]),  # their first token: 10 nats less likely than " go"'s
-        (0.0, [" stop", " stop stop", " left"]),  # none reaches 0: the best and all that may beat it
-        (-20.0, []),
-    ],
-)
-def test_only_the_sequences_that_can_decide_are_scored_the_others_bounded_by_their_first_token(
-    tones_model: WhisperModel, least: float, bounded: List[str]
-) -> None:
-    texts = [
-        " go left",
-        " go lefts",
-        " go lift",
-        " go",
-        " stop",
-        " stop stop",
-        " a",
-        " go to the kitchen",
-        " left",
-    ]
-    sequences = [_tokens(text) for text in texts]
-    calls: List[List[int]] = []
-    session = RecordedDecoding(DecoderSession(tones_model, _cross(tones_model, "go left")), calls)
-    prompted = session(PROMPT)
-    exact = score_phrases(session.fork(), PROMPT, sequences, MANIFEST, prompted)
-    calls.clear()
-    always = [texts.index(" a")]  # scored whatever its score: the free text's phrase, for its evidence
-    scores = score_phrases_that_decide(session, PROMPT, sequences, MANIFEST, prompted, least, always)
-    # one decoder call for each sequence scored, exactly as score_phrases scores it
-    scored = [texts[sequences.index(tokens)] for tokens in calls]
-    assert sorted(scored) == sorted(set(texts) - set(bounded))
-    assert [score for score, text in zip(scores, texts) if text in scored] == [
-        score for score, text in zip(exact, texts) if text in scored
-    ]
-    # the others: an upper bound of their score, below ``least`` and the best's score
-    for text in bounded:
-        index = texts.index(text)
-        assert exact[index] < scores[index] < least and scores[index] <= max(exact)
-    # an empty sequence (eot first, which Whisper's rules rule out) is bounded by -inf, no call
-    assert score_phrases_that_decide(session, PROMPT, [[]], MANIFEST, prompted, least) == [-np.inf]
-    assert len(calls) == len(scored)
 
 
 # For the pure functions, 4 tokens: 0 " " and 1 text, 2 eot, 3 suppressed.
