@@ -29,15 +29,14 @@ import argparse
 import contextlib
 import dataclasses
 import time
-import zlib
 from typing import Any, Callable, Dict, Iterator, List, Sequence, Tuple
 
 import numpy as np
 
 from bench.end_of_speech import after_each_other, gated, played_in_real_time, played_on_fake_clock
-from bench.grammar import COMMANDS, ENGINES, OUT_OF_GRAMMAR, RATE, ROOM_DB, lines
+from bench.grammar import COMMANDS, DIGITS, ENGINES, OUT_OF_GRAMMAR, RATE, in_the_room, lines
 from fixtures.festival import speak_festival
-from fixtures.noises import at_level, read_audio
+from fixtures.noises import read_audio
 from fixtures.recordings import SPEECH_COMMANDS
 from harness.catalog import ScenarioEngines
 from speech_event.config import SpeechEventConfig
@@ -45,7 +44,6 @@ from speech_event.ports import Recognizer, Transcript
 from speech_event.recognizers.whisper import forced, model, recognizer
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
 
-DIGITS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine")
 SAID_COMMANDS = (
     "go to the kitchen",
     "turn left",
@@ -75,21 +73,17 @@ def grammars() -> Dict[str, str]:
     }
 
 
-def in_the_room(speech: np.ndarray, name: str) -> np.ndarray:
-    rng = np.random.default_rng(zlib.crc32(name.encode()))
-    room = [at_level("pink", round(MARGIN * RATE), ROOM_DB, RATE, rng) for _ in range(2)]
-    return np.concatenate([room[0], speech, room[1]]).astype(np.float32)
-
-
 def speech_sets() -> Dict[str, List[Tuple[str, np.ndarray]]]:
     """Each set's utterances: (what was said, the audio at RATE)."""
 
     def clips(word: str, count: int) -> List[Tuple[str, np.ndarray]]:
         paths = sorted((SPEECH_COMMANDS / word).glob("*.wav"))[:count]
-        return [(word, in_the_room(read_audio(path, RATE), path.name)) for path in paths]
+        return [(word, in_the_room(read_audio(path, RATE), MARGIN, path.name)) for path in paths]
 
     def voiced(phrases: Sequence[str]) -> List[Tuple[str, np.ndarray]]:
-        return [(phrase, in_the_room(speak_festival(phrase, "slt", RATE), phrase)) for phrase in phrases]
+        return [
+            (phrase, in_the_room(speak_festival(phrase, "slt", RATE), MARGIN, phrase)) for phrase in phrases
+        ]
 
     return {
         "people, accepted": [said for word in ("yes", "no", "stop") for said in clips(word, 3)],
