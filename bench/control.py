@@ -25,11 +25,10 @@ from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig
-from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import Float32MultiArray, SetEnabledRequest, SetLanguageRequest, String
 from speech_event.node import SpeechEventNode
-from speech_event.ports import Executor, Recognizer
+from speech_event.ports import EngineBuilder, Executor, Recognizer
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
 

@@ -83,9 +83,9 @@ from speech_event.messages import Float32MultiArray, SetGrammarRequest, String, 
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Clock, Executor, Recognizer
-from speech_event.speech_end import SpeechEnds
 from speech_event.spelling import spelt
 from speech_event.topics import SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
+from speech_event.turns.speech_end import SpeechEnds
 
 RATE = 48000
 BLOCK = 4096

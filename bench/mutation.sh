@@ -11,12 +11,12 @@ scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 tar -C "$checkout" --exclude=./.git --exclude=./.tox --exclude=./mutants --exclude='*.egg-info' \
     --exclude=__pycache__ -cf - . | tar -xf - -C "$scratch"
-tests='"tests/pipeline/test_validate.py", "tests/pipeline/test_assembly.py", "tests/pipeline/test_transcript.py", "tests/test_periodic.py"'
+tests='"tests/pipeline/test_validate.py", "tests/pipeline/test_assembly.py", "tests/pipeline/test_transcript.py", "tests/interfaces/test_periodic.py"'
 cat >> "$scratch/pyproject.toml" <<TOML
 
 [tool.mutmut]
 source_paths = ["speech_event/"]
-only_mutate = ["speech_event/pipeline/validate.py", "speech_event/pipeline/assembly.py", "speech_event/pipeline/transcript.py", "speech_event/periodic.py"]
+only_mutate = ["speech_event/pipeline/validate.py", "speech_event/pipeline/assembly.py", "speech_event/pipeline/transcript.py", "speech_event/interfaces/periodic.py"]
 also_copy = ["fixtures/", "harness/"]
 pytest_add_cli_args = ["-p", "no:cacheprovider", "-q"]
 pytest_add_cli_args_test_selection = [$tests]

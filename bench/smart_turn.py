@@ -16,8 +16,8 @@ import numpy as np
 from fixtures.noises import read_audio
 from fixtures.pipecat_smart_turn import as_pipecat_pads, pipecats_features
 from fixtures.recordings import ljspeech
-from speech_event.pipeline.smart_turn import SmartTurn, smart_turn_features
 from speech_event.recognizers.whisper.features import SAMPLE_RATE
+from speech_event.turns.smart_turn import SmartTurn, smart_turn_features
 
 
 def milliseconds(call: Callable[..., object], *arguments: object) -> float:

@@ -1,6 +1,6 @@
 """``python -m harness replay-storage DIR``: stored field recordings through the node, again.
 
-Each utterance in DIR's index (``audio_storage_dir``, speech_event/interfaces/storage.py) is played to the
+Each utterance in DIR's index (``audio_storage_dir``, speech_event/pipeline/storage.py) is played to the
 node on the in-memory bus in its language, and what the node publishes now is compared with what
 it published then: regression testing from field recordings. Recordings the size bound removed
 are listed as gone, not counted as changed.
@@ -20,9 +20,9 @@ from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
 from speech_event.config import SpeechEventConfig
-from speech_event.interfaces.storage import INDEX_NAME, STORED_RATE, read_index
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
+from speech_event.pipeline.storage import INDEX_NAME, STORED_RATE, read_index
 from speech_event.ports import Recognizer
 
 BLOCK = 4096  # soundDetection's block

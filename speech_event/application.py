@@ -13,8 +13,8 @@ from typing import List, Optional
 
 from speech_event.config import SpeechEventConfig, load_config
 from speech_event.errors import ConfigError, ModelError, StorageError
-from speech_event.interfaces.storage import check_storage_dir
 from speech_event.pipeline.screen import SpeechScreen, speech_screen_for
+from speech_event.pipeline.storage import check_storage_dir
 from speech_event.ports import Recognizer
 from speech_event.recognizers import RECOGNIZERS, engine_builder
 

@@ -44,7 +44,7 @@ class SpeechEventConfig:
     rw_model_path: str = ""
     en_model_path: str = ""
     # Empty: utterances are not stored. Otherwise each utterance is written there as a 16 kHz WAV
-    # file with a line in index.jsonl (speech_event/interfaces/storage.py), the folder kept under this size.
+    # file with a line in index.jsonl (speech_event/pipeline/storage.py), the folder kept under this size.
     audio_storage_dir: str = ""
     audio_storage_max_mb: float = 500.0
     cuda: bool = False
@@ -82,7 +82,7 @@ class SpeechEventConfig:
     # A recognition running longer is logged, and cancelled where the engine allows; 0: never.
     recognition_timeout: float = 30.0
     # Transcribe the utterance so far once no block came for speculation_gap, so its text is
-    # ready when the pause ends (speech_event/speculation.py); texts are the same either way.
+    # ready when the pause ends (speech_event/turns/speculation.py); texts are the same either way.
     speculative_recognition: bool = True
     # None: 0.1 s while the end of speech decides, else 0.3 (speculation_gap_seconds).
     speculation_gap: Optional[float] = None
@@ -91,7 +91,7 @@ class SpeechEventConfig:
     # text two speculations in a row agreed on.
     early_pause: float = 0.0
     complete_answers: str = "yes,no,yego,oya"
-    # End of turn at the end of speech (speech_event/end_of_turn.py): once this long of non-speech
+    # End of turn at the end of speech (speech_event/turns/end_of_turn.py): once this long of non-speech
     # follows the speech in the audio (or no block came for this long), the turn ends there if
     # the text up to there is complete; 0: off. It decides by speculating: off without
     # speculative_recognition, and early_pause (the older opt-in) takes its place when set.
@@ -99,7 +99,7 @@ class SpeechEventConfig:
     # pocketsphinx (end_of_speech_seconds).
     end_of_speech: Optional[float] = None
     # While an utterance is spoken, publish its text so far on /speechEvent/partial at most this
-    # often, when the worker is idle (speech_event/partials.py); 0: off. Final texts are the same.
+    # often, when the worker is idle (speech_event/turns/partials.py); 0: off. Final texts are the same.
     partial_period: float = 0.5
     # How free speech's texts are written on /speechEvent/text, the action's result and
     # /speechEvent/partial: robot (lower case, no punctuation, numbers in words, as the robot's NeMo

@@ -159,6 +159,10 @@ class Recognizer(Protocol):
         ...
 
 
+# language -> its engine; raises ModelError (with what is wrong) when it cannot be built.
+EngineBuilder = Callable[[str], Recognizer]
+
+
 @runtime_checkable
 class Stoppable(Protocol):
     """An engine whose running ``transcribe`` another thread can stop (recognition_timeout, and

@@ -2,7 +2,7 @@
 
 SIGNAL_TOPIC = "/soundDetection/signal"
 TEXT_TOPIC = "/speechEvent/text"
-# The text of the utterance being spoken, so far (speech_event/partials.py).
+# The text of the utterance being spoken, so far (speech_event/turns/partials.py).
 PARTIAL_TOPIC = "/speechEvent/partial"
 # Every partial and final text with its confidence, language, engine and times (msg/Transcript.msg).
 TRANSCRIPT_TOPIC = "/speechEvent/transcript"

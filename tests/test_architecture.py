@@ -1,5 +1,6 @@
 """The architecture, read from the code's import statements with ast (nothing is imported): the
-shared ONNX code knows no family, no modules import each other, and ROS stays in its rooms.
+node library's layers import only downwards, the shared ONNX code knows no family, no modules
+import each other, and ROS stays in its rooms.
 
 Every import counts, at the top of a module or inside a function or ``if TYPE_CHECKING``: an
 import put inside a function to dodge a circle is still a circle."""
@@ -29,6 +30,32 @@ ROS = (
     "std_msgs",
 )
 ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.ros")
+# The node library's layers, lowest first: a module imports from its own layer or those below it.
+# The base (the ports, the configuration, messages and grammars) knows no engine; the engines know
+# no node; the robot's interfaces know no pipeline; the pipeline, message in to text out, knows no
+# turn rules; the rules on the utterance being collected know no node; the node is the wiring, and
+# the deployment, the GUI and the public API sit on top.
+LAYERS = (
+    (
+        "speech_event.errors",
+        "speech_event.keyvalue",
+        "speech_event.config",
+        "speech_event.grammar",
+        "speech_event.messages",
+        "speech_event.ports",
+        "speech_event.topics",
+        "speech_event.spelling",
+    ),
+    ("speech_event.recognizers",),
+    ("speech_event.exporters",),
+    ("speech_event.models",),
+    ("speech_event.interfaces",),
+    ("speech_event.pipeline",),
+    ("speech_event.turns",),
+    ("speech_event.node", "speech_event.adapters"),
+    ("speech_event.application", "speech_event.gui"),
+    ("speech_event", "speech_event.__main__"),
+)
 
 
 @dataclass(frozen=True)
@@ -122,6 +149,65 @@ def test_the_modules_are_found_and_their_imports_read() -> None:
     read = {(found.module, found.name) for found in IMPORTS}
     assert ("speech_event.node", "speech_event.config.SpeechEventConfig") in read
     assert ("harness.driver_node", "harness.ros.driver_side.ros_side") in read  # inside a function
+
+
+def _in_library(module: str) -> bool:
+    return module == "speech_event" or module.startswith("speech_event.")
+
+
+def _layer(module: str) -> int:
+    """The layer of a module of speech_event: the longest prefix in LAYERS names it."""
+    matches = [
+        (len(prefix), index)
+        for index, prefixes in enumerate(LAYERS)
+        for prefix in prefixes
+        if module == prefix or module.startswith(prefix + ".")
+    ]
+    return max(matches)[1]
+
+
+LIBRARY_IMPORTS = [
+    (found, _module_of(found.name))
+    for found in IMPORTS
+    if _in_library(found.module) and _in_library(_module_of(found.name))
+]
+
+
+def test_every_module_of_the_node_library_has_its_layer() -> None:
+    """A new module is placed in LAYERS, or it would sit on top with the public API."""
+    top = len(LAYERS) - 1
+    unplaced = [
+        module
+        for module in MODULES
+        if _in_library(module) and _layer(module) == top and module not in LAYERS[top]
+    ]
+    assert unplaced == []
+
+
+def test_the_node_library_imports_only_downwards() -> None:
+    upwards = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found, target in LIBRARY_IMPORTS
+        if _layer(target) > _layer(found.module)
+    ]
+    assert upwards == []
+
+
+def test_the_layers_tell_upwards_from_downwards() -> None:
+    assert _layer("speech_event.pipeline.storage") > _layer("speech_event.interfaces.health")
+    assert _layer("speech_event.turns.rules") > _layer("speech_event.pipeline.worker")
+    assert _layer("speech_event.recognizers.onnx.grammar_choice") == _layer("speech_event.recognizers")
+    assert _layer("speech_event.node") > _layer("speech_event.turns") > _layer("speech_event.ports")
+
+
+def test_the_node_library_imports_nothing_of_the_harness_the_benchmarks_or_the_tests() -> None:
+    wrong = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found in IMPORTS
+        if _in_library(found.module)
+        and any(found.within(outside) for outside in ("harness", "bench", "fixtures", "tests"))
+    ]
+    assert wrong == []
 
 
 def test_the_shared_onnx_code_imports_nothing_of_the_recognizers_but_itself() -> None:

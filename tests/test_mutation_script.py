@@ -14,14 +14,14 @@ FAKE_MUTMUT = """#!/bin/sh
 case "$*" in
     "run --max-children 2") echo "mutants checked" ;;
     "results --all true") cat <<'EOF'
-    speech_event.periodic.xǁPeriodicǁstart__mutmut_1: killed
-    speech_event.periodic.xǁPeriodicǁstart__mutmut_2: survived
+    speech_event.interfaces.periodic.xǁPeriodicǁstart__mutmut_1: killed
+    speech_event.interfaces.periodic.xǁPeriodicǁstart__mutmut_2: survived
     speech_event.pipeline.validate.x_validate__mutmut_1: killed
     speech_event.pipeline.validate.x_validate__mutmut_2: killed
     speech_event.pipeline.validate.x_validate__mutmut_3: timeout
 EOF
     ;;
-    "results") echo "    speech_event.periodic.xǁPeriodicǁstart__mutmut_2: survived" ;;
+    "results") echo "    speech_event.interfaces.periodic.xǁPeriodicǁstart__mutmut_2: survived" ;;
     *) echo "unexpected: mutmut $*" >&2; exit 2 ;;
 esac
 """
@@ -46,11 +46,11 @@ def test_the_mutation_script_prints_each_modules_score_the_overall_score_and_the
     )
     assert result.stderr == ""
     assert result.stdout == (
-        "speech_event.periodic: 1/2 killed {'killed': 1, 'survived': 1}\n"
+        "speech_event.interfaces.periodic: 1/2 killed {'killed': 1, 'survived': 1}\n"
         "speech_event.pipeline.validate: 2/3 killed {'killed': 2, 'timeout': 1}\n"
         "overall: 3/5 = 60.0 %\n"
         "survivors:\n"
-        "    speech_event.periodic.xǁPeriodicǁstart__mutmut_2: survived\n"
+        "    speech_event.interfaces.periodic.xǁPeriodicǁstart__mutmut_2: survived\n"
     )
     assert result.returncode == 0
 

@@ -26,7 +26,7 @@ def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published
         name="slow",
         source="test",
         # Without speculation: each recognition starts when its utterance closes (with it they
-        # come sooner: tests/test_speculation.py).
+        # come sooner: tests/turns/test_speculation.py).
         config=SpeechEventConfig(speculative_recognition=False),
         steps=(Say("one"), Silence(1.6), Say("two"), Silence(1.6), Say("three")),
         expected=("one", "two", "three"),

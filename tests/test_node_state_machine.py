@@ -30,7 +30,7 @@ CONFIG = SpeechEventConfig(
     max_message_length=1.0,
     health_check_period=3600.0,
     # The recognizer here records what it is given: speculations would show the open utterance
-    # to it too. Speculation publishes the same as without it (tests/test_speculation.py).
+    # to it too. Speculation publishes the same as without it (tests/turns/test_speculation.py).
     speculative_recognition=False,
 )
 LIMIT = int(CONFIG.max_utterance_length * CONFIG.sample_rate)

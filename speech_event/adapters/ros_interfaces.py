@@ -7,9 +7,10 @@ add_service_files, add_action_files); elsewhere this is the build step, no catki
 ``speech_event/srv`` next to the code, where catkin's install puts them too. The ROS adapter runs
 it on import when they are missing or older than their definitions. Where the package's folder
 cannot be written (a system-wide install run by another user) they are built under
-``$XDG_CACHE_HOME/speech_event/ros_interfaces/<digest of the definitions>`` and found there through
-the package's ``__path__``. Actions go through actionlib_msgs' own genaction.py (Debian's
-libactionlib-msgs-dev) into the seven messages of an action, as catkin does.
+``$XDG_CACHE_HOME/speech_event/ros_interfaces/<digest of the definitions>`` and found there by an
+import finder of this module's (the package itself is not touched). Actions go through
+actionlib_msgs' own genaction.py (Debian's libactionlib-msgs-dev) into the seven messages of an
+action, as catkin does.
 
 ``generate`` also builds any other package's definitions: the tests build the robot's own client
 types (other names, same fields) this way and call the node through them.
@@ -17,15 +18,16 @@ types (other names, same fields) this way and call the node through them.
 
 import fcntl
 import hashlib
+import importlib.abc
+import importlib.machinery
+import importlib.util
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Dict, List, Optional
-
-import speech_event
+from typing import Dict, List, Optional, Sequence
 
 PACKAGE = "speech_event"
 PACKAGE_DIRECTORY = Path(__file__).resolve().parents[1]  # speech_event/: its msg/ and srv/ subpackages
@@ -113,16 +115,35 @@ def _up_to_date(out: Path) -> bool:
     return min(path.stat().st_mtime for path in built) >= newest
 
 
+class _InterfacesFinder(importlib.abc.MetaPathFinder):
+    """Imports ``speech_event.msg`` and ``speech_event.srv`` from a folder outside the package;
+    their modules then come from there, as a subpackage's do."""
+
+    def __init__(self, out: Path) -> None:
+        self.out = out
+
+    def find_spec(
+        self, fullname: str, path: Optional[Sequence[str]], target: object = None
+    ) -> Optional[importlib.machinery.ModuleSpec]:
+        package, _, subpackage = fullname.rpartition(".")
+        init = self.out / subpackage / "__init__.py"
+        if package != PACKAGE or subpackage not in ("msg", "srv") or not init.is_file():
+            return None
+        return importlib.util.spec_from_file_location(
+            fullname, init, submodule_search_locations=[str(init.parent)]
+        )
+
+
 def ensure_built(writable: Optional[bool] = None) -> Path:
     """Build the node's interfaces unless catkin or an earlier run did (one process at a time).
 
     ``writable`` (default: whether the package's folder is) chooses output_directory; outside the
-    package, the folder joins the package's ``__path__`` so ``speech_event.msg`` imports from it."""
+    package, an _InterfacesFinder finds ``speech_event.msg`` and ``speech_event.srv`` there."""
     out = output_directory(os.access(PACKAGE_DIRECTORY, os.W_OK) if writable is None else writable)
     if out != PACKAGE_DIRECTORY:
         out.mkdir(parents=True, exist_ok=True)
-        if str(out) not in speech_event.__path__:
-            speech_event.__path__.insert(0, str(out))
+        if not any(isinstance(finder, _InterfacesFinder) and finder.out == out for finder in sys.meta_path):
+            sys.meta_path.insert(0, _InterfacesFinder(out))
     if not _up_to_date(out):
         with open(out / ".ros_interfaces.lock", "w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)

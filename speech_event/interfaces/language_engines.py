@@ -5,13 +5,10 @@ subscriber callback, never the recognition worker), once: a later switch back an
 """
 
 import threading
-from typing import Callable, Dict, Optional
+from typing import Dict, Optional
 
 from speech_event.errors import ModelError
-from speech_event.ports import Recognizer
-
-# language -> its engine; raises ModelError (with what is wrong) when it cannot be built.
-EngineBuilder = Callable[[str], Recognizer]
+from speech_event.ports import EngineBuilder, Recognizer
 
 
 class LanguageEngines:

@@ -1,7 +1,7 @@
 """Closed utterances on the recognition worker: queued (bounded by ``max_backlog``, the oldest
 waiting one dropped past it), recognized one at a time, oldest first, each watched by
 ``recognition_timeout`` while it runs, and concluded. While one waits or runs, the worker does
-nothing for the utterance still being collected (speech_event/background_runs.py)."""
+nothing for the utterance still being collected (speech_event/turns/background_runs.py)."""
 
 import threading
 from typing import Callable, Optional

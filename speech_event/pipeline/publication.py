@@ -1,7 +1,8 @@
-"""publish: what recognition made of a closed utterance becomes the text on /speechEvent/text,
-the action's result, the statistics and, when storing is on, the stored record; with each text
-published, and each partial text (/speechEvent/partial), a message on /speechEvent/transcript
-with its confidence, language, engine and the times of its utterance's blocks."""
+"""Step 7 of the pipeline, publish: what recognition made of a closed utterance becomes the text
+on /speechEvent/text, the action's result, the statistics and, when storing is on, the stored
+record; with each text published, and each partial text (/speechEvent/partial), a message on
+/speechEvent/transcript with its confidence, language, engine and the times of its utterance's
+blocks."""
 
 import functools
 import logging
@@ -11,9 +12,9 @@ from typing import Callable, Optional, Protocol
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.action import ListenAction
 from speech_event.interfaces.diagnostics import DISCARDED_BACKLOG, NodeStatistics
-from speech_event.interfaces.storage import StoredUtterance, UtteranceStore
 from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, String, TranscriptMessage
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.pipeline.storage import StoredUtterance, UtteranceStore
 from speech_event.pipeline.transcript import checked_transcript, styled, text_to_publish
 from speech_event.ports import Publisher, Transcript, Transport, engine_name
 from speech_event.topics import PARTIAL_TOPIC, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC, TRANSCRIPT_TOPIC

@@ -1,6 +1,6 @@
-"""resample -> screen -> transcribe: one utterance's recognition, run on the worker (for a closed
-utterance or a speculation). It never raises: a failure is part of the outcome, said when the
-utterance is published (a cancelled speculation never is).
+"""Step 6 of the pipeline, resample -> screen -> transcribe: one utterance's recognition, run on
+the worker (for a closed utterance or a speculation). It never raises: a failure is part of the
+outcome, said when the utterance is published (a cancelled speculation never is).
 
 The grammar goes to the engine here, on the worker, just before it transcribes: an utterance
 closed before a set_grammar is recognized with the grammar in force when it closed."""

@@ -1,4 +1,5 @@
-"""Closed utterances waiting for recognition, bounded by seconds of audio (``max_backlog``).
+"""Step 3 of the pipeline: closed utterances waiting for recognition, bounded by seconds of
+audio (``max_backlog``).
 
 When recognition cannot keep up (an engine slower than speech, a hung recognition), an unbounded
 queue grows by about 700 MB per hour of 48 kHz speech. Past half the bound the node warns, once

@@ -1,4 +1,4 @@
-"""Step 3 of the pipeline: bring an utterance to the recognizer's sample rate.
+"""Step 4 of the pipeline: bring an utterance to the recognizer's sample rate.
 
 soxr is a proper band-limited resampler: naive interpolation would fold everything above the new
 Nyquist frequency back into the speech band.

@@ -1,4 +1,4 @@
-"""Step 3b of the pipeline, after resampling: is this utterance speech worth transcribing?
+"""Step 5 of the pipeline, after resampling: is this utterance speech worth transcribing?
 
 The robot's release drops utterances shorter than ``minUtteranceLen`` and those whose Silero VAD
 speech probability stays below ``vadThreshold``. Neither is speech the engine failed to read, so

@@ -1,4 +1,4 @@
-"""Step 5 of the pipeline: what, if anything, to publish for one transcript, and how it is written."""
+"""Step 7 of the pipeline: what, if anything, to publish for one transcript, and how it is written."""
 
 import logging
 import math

@@ -1,13 +1,13 @@
 """The recognition worker, as the jobs handed to it see it: closed utterances
-(closed_utterances.py) and the background runs (speech_event/background_runs.py)."""
+(closed_utterances.py) and the background runs (speech_event/turns/background_runs.py)."""
 
 from dataclasses import dataclass
 from typing import Callable
 
 from speech_event.pipeline.publication import Publishes
 from speech_event.pipeline.recognition import Recognize
+from speech_event.pipeline.watchdog import Watchdog
 from speech_event.ports import Executor
-from speech_event.watchdog import Watchdog
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,7 @@ from typing import Callable, Dict, Optional
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.grammar import Grammar, load_grammar
-from speech_event.interfaces.language_engines import EngineBuilder
-from speech_event.ports import Recognizer
+from speech_event.ports import EngineBuilder, Recognizer
 from speech_event.recognizers.nemo.manifest import CONFORMER_TRANSDUCER, NEMO_FAMILIES
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.onnx.families import family_of

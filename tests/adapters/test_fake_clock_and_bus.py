@@ -5,8 +5,8 @@ import pytest
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
+from speech_event.interfaces.periodic import Periodic
 from speech_event.messages import String
-from speech_event.periodic import Periodic
 from speech_event.ports import PublisherStatus
 
 

@@ -14,7 +14,7 @@ tests/real/test_trained_scenarios.py.
 And with the turn ending at the end of speech (end_of_speech set to 0.3: in free speech too, and
 with pocketsphinx): what the scenario expects at 0 s (but its partial results), and at 1 s the
 texts of the node that waits for the pause (end_of_speech 0)
-(tests/test_end_of_turn.py, and the trained scenarios in tests/real/test_trained_scenarios.py)."""
+(tests/turns/test_end_of_turn.py, and the trained scenarios in tests/real/test_trained_scenarios.py)."""
 
 import dataclasses
 from pathlib import Path

@@ -10,10 +10,9 @@ from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryPublisher
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC
-from speech_event.interfaces.language_engines import EngineBuilder
 from speech_event.messages import DiagnosticArray, Float32MultiArray, String
 from speech_event.node import SpeechEventNode
-from speech_event.ports import Executor, Recognizer
+from speech_event.ports import EngineBuilder, Executor, Recognizer
 
 
 class Rig:

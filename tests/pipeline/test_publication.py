@@ -14,11 +14,11 @@ from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.action import ListenAction
 from speech_event.interfaces.diagnostics import NodeState, NodeStatistics
-from speech_event.interfaces.storage import StoredUtterance, UtteranceStore, read_index
 from speech_event.messages import RecogniseSpeechGoal, RecogniseSpeechResult, String
 from speech_event.pipeline.publication import Publication
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.screen import Discard
+from speech_event.pipeline.storage import StoredUtterance, UtteranceStore, read_index
 from speech_event.ports import PublisherStatus, Transcript
 from speech_event.topics import SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
 from tests.helpers.fakes import SpyRecognizer

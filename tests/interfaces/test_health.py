@@ -1,4 +1,4 @@
-"""The periodic checks alone (speech_event/health.py): soundDetection, /diagnostics, the heartbeat."""
+"""The periodic checks alone (speech_event/interfaces/health.py): soundDetection, /diagnostics, the heartbeat."""
 
 import dataclasses
 import logging
@@ -9,14 +9,16 @@ import pytest
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryPublisher
 from speech_event.config import SpeechEventConfig
-from speech_event.health import Health
 from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, STATUS_NAME, NodeState, NodeStatistics
+from speech_event.interfaces.health import Health
 from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, KeyValue
+from speech_event.pipeline.screen import Discard
 from speech_event.ports import PublisherStatus
 from speech_event.topics import SIGNAL_TOPIC
 
 CONFIG = SpeechEventConfig(health_check_period=5.0, heartbeat_msg_period=10.0, verbose_mode=False)
 VERBOSE = dataclasses.replace(CONFIG, verbose_mode=True)
+DISCARDS = [reason.value for reason in Discard]  # what the node tells Health
 
 
 class Rig:
@@ -36,7 +38,7 @@ class Rig:
         if sound_detection_up:
             self.sound_detection = self.bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
         self.rejected: Dict[str, int] = {}
-        self.health = Health(config, self.bus, self.clock, self.statistics, self._state, self._down)
+        self.health = Health(config, self.bus, self.clock, self.statistics, self._state, self._down, DISCARDS)
 
     def _diagnostic(self, message: object) -> None:
         assert isinstance(message, DiagnosticArray)
@@ -145,6 +147,7 @@ def test_down_is_said_before_the_diagnostics_of_the_same_check() -> None:
         rig.statistics,
         rig._state,
         lambda: published_before_down.append(len(rig.diagnostics)),
+        DISCARDS,
     )
     rig.health.start(0.0)
     rig.clock.advance_to(10.0)
@@ -242,7 +245,7 @@ def test_a_failing_check_does_not_stop_the_checks_after_it(caplog: pytest.LogCap
             raise failures.pop()
         rig.downs.append(rig.clock.now())
 
-    rig.health = Health(CONFIG, rig.bus, rig.clock, rig.statistics, rig._state, down)
+    rig.health = Health(CONFIG, rig.bus, rig.clock, rig.statistics, rig._state, down, DISCARDS)
     rig.health.start(0.0)
     with caplog.at_level(logging.ERROR, logger="speech_event"):
         rig.clock.advance_to(10.0)

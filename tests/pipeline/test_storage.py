@@ -17,9 +17,9 @@ import pytest
 from fixtures.audio import speak_tones
 from harness.cli import main as harness_main
 from speech_event.config import SpeechEventConfig
-from speech_event.interfaces.storage import INDEX_NAME, StoredUtterance, UtteranceStore, read_index, wav_bytes
 from speech_event.messages import Float32MultiArray
 from speech_event.pipeline.resample import resample
+from speech_event.pipeline.storage import INDEX_NAME, StoredUtterance, UtteranceStore, read_index, wav_bytes
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from tests.helpers.application import run_application

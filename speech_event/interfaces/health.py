@@ -2,13 +2,12 @@
 the heartbeat line in verbose mode."""
 
 import logging
-from typing import Callable, List
+from typing import Callable, List, Sequence
 
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.diagnostics import DIAGNOSTICS_TOPIC, NodeState, NodeStatistics, diagnostic_array
+from speech_event.interfaces.periodic import Periodic
 from speech_event.messages import DiagnosticArray, DiagnosticStatus
-from speech_event.periodic import Periodic
-from speech_event.pipeline.screen import Discard
 from speech_event.ports import Clock, PublisherStatus, Transport
 from speech_event.topics import SIGNAL_TOPIC
 
@@ -26,15 +25,18 @@ class Health:
         statistics: NodeStatistics,
         state: Callable[[PublisherStatus], NodeState],
         on_down: Callable[[], None],
+        discard_reasons: Sequence[str],
     ) -> None:
         """``state(sound_detection)`` is what the node says about itself; ``on_down`` says
-        soundDetection is down."""
+        soundDetection is down; ``discard_reasons`` name why the screen may not transcribe an
+        utterance (each has its count in /diagnostics)."""
         self._config = config
         self._transport = transport
         self._clock = clock
         self._statistics = statistics
         self._state = state
         self._on_down = on_down
+        self._discard_reasons = list(discard_reasons)
         self.sound_detection = PublisherStatus.CONNECTED  # as the last check found it
         self._periodic: List[Periodic] = []
 
@@ -69,7 +71,7 @@ class Health:
     def status(self) -> DiagnosticStatus:
         """The node's /diagnostics status now."""
         state = self._state(self.sound_detection)
-        return self._statistics.status(state, [reason.value for reason in Discard])
+        return self._statistics.status(state, self._discard_reasons)
 
     def heartbeat(self) -> None:
         """Log that the node runs, with what it has done."""

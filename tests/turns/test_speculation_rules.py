@@ -1,4 +1,4 @@
-"""The speculation rules alone (speech_event/speculation.py): Speculation and SpeculationRules."""
+"""The speculation rules alone (speech_event/turns/speculation.py): Speculation and SpeculationRules."""
 
 import dataclasses
 from typing import List, NamedTuple, Optional, Tuple
@@ -11,7 +11,7 @@ from speech_event.grammar import Grammar, requested_grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.screen import Discard
 from speech_event.ports import Recognizer, Stoppable, Transcript
-from speech_event.speculation import (
+from speech_event.turns.speculation import (
     Speculation,
     SpeculationCounts,
     SpeculationRules,

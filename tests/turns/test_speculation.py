@@ -19,7 +19,7 @@ from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
-from speech_event.speculation import complete_answers, is_complete
+from speech_event.turns.speculation import complete_answers, is_complete
 from tests.helpers.rig import Rig
 
 RATE = 16000

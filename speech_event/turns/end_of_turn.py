@@ -25,7 +25,7 @@ from typing import Callable, List, Optional
 import numpy as np
 
 from speech_event.config import SpeechEventConfig, end_of_speech_seconds, ends_at_end_of_speech
-from speech_event.speech_end import SpeechEnds
+from speech_event.turns.speech_end import SpeechEnds
 
 
 @dataclass(frozen=True)

@@ -32,18 +32,18 @@ from typing import Callable, Optional, Protocol
 
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
-from speech_event.partials import PartialCounts, PartialFeed, PartialRules
 from speech_event.pipeline.publication import TextOrigin
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
-from speech_event.pipeline.smart_turn import TurnHeard
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Clock, Incremental, Recognizer, Stoppable, Transcript
-from speech_event.speculation import (
+from speech_event.turns.partials import PartialCounts, PartialFeed, PartialRules
+from speech_event.turns.smart_turn import TurnHeard
+from speech_event.turns.speculation import (
     Speculation,
     SpeculationCounts,
     SpeculationRules,
 )
-from speech_event.turn_taking import RearmingTimer
+from speech_event.turns.turn_taking import RearmingTimer
 
 _LOG = logging.getLogger("speech_event")
 

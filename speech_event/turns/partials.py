@@ -14,11 +14,11 @@ audio so far. It publishes the text on /speechEvent/partial when it is not empty
   partial, on a decoder of its own that the final texts never touch. The feed goes in chunks of
   FEED_SECONDS and stops between two once the utterance has closed.
 
-A speculation (speech_event/speculation.py) that ends with more audio to come, or waiting for the
+A speculation (speech_event/turns/speculation.py) that ends with more audio to come, or waiting for the
 pause to end, also gives the text so far: it is published as a partial too, when it is new.
 
 A partial never publishes on /speechEvent/text and never ends a turn: final texts are exactly those
-of the node without partials, at the same times (tests/test_partials.py, test_every_scenario.py).
+of the node without partials, at the same times (tests/turns/test_partials.py, test_every_scenario.py).
 """
 
 from dataclasses import dataclass
@@ -38,7 +38,7 @@ from speech_event.ports import (
     Stoppable,
     Transcript,
 )
-from speech_event.speculation import Speculation
+from speech_event.turns.speculation import Speculation
 
 # An Incremental engine is fed this much audio at a time: a closing utterance waits for at most
 # one chunk (pocketsphinx: about 15 ms of work for 0.1 s of audio on this project's CI machine).

@@ -1,11 +1,11 @@
-"""EndOfTurn alone (speech_event/end_of_turn.py): which cuts of an utterance are decided."""
+"""EndOfTurn alone (speech_event/turns/end_of_turn.py): which cuts of an utterance are decided."""
 
 import dataclasses
 
 import numpy as np
 
 from fixtures.audio import speak_tones
-from speech_event.end_of_turn import EndOfTurn
+from speech_event.turns.end_of_turn import EndOfTurn
 from tests.helpers.rig import AT_16K
 
 RATE = 16000

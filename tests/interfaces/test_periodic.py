@@ -6,7 +6,7 @@ from typing import Callable, Dict, List, Tuple
 import pytest
 
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
-from speech_event.periodic import Periodic
+from speech_event.interfaces.periodic import Periodic
 
 
 class _LateClock:

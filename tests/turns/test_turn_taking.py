@@ -1,4 +1,4 @@
-"""Turn-taking alone (speech_event/turn_taking.py): RearmingTimer and TurnTaking on the fake clock.
+"""Turn-taking alone (speech_event/turns/turn_taking.py): RearmingTimer and TurnTaking on the fake clock.
 
 Times are binary fractions, so every time the clock reaches is exact.
 """
@@ -12,7 +12,7 @@ import pytest
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.config import SpeechEventConfig
 from speech_event.ports import TIMER_TOLERANCE
-from speech_event.turn_taking import RearmingTimer, TurnTaking
+from speech_event.turns.turn_taking import RearmingTimer, TurnTaking
 
 # -- RearmingTimer ----------------------------------------------------------------------------------
 

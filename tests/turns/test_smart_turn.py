@@ -1,4 +1,4 @@
-"""Smart Turn v3.2 (speech_event/pipeline/smart_turn.py): its features against pipecat's own
+"""Smart Turn v3.2 (speech_event/turns/smart_turn.py): its features against pipecat's own
 ``_whisper_features.py`` on the same audio, and what it hears at the ends of LJ Speech's readings."""
 
 import importlib.util
@@ -13,7 +13,8 @@ from fixtures.pipecat_smart_turn import as_pipecat_pads, pipecats_features
 from fixtures.recordings import ljspeech
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError, ModelError
-from speech_event.pipeline.smart_turn import (
+from speech_event.recognizers.whisper.features import SAMPLE_RATE
+from speech_event.turns.smart_turn import (
     HEARD_PAUSE,
     WINDOW_SAMPLES,
     SmartTurn,
@@ -21,7 +22,6 @@ from speech_event.pipeline.smart_turn import (
     turn_heard_for,
     with_pause,
 )
-from speech_event.recognizers.whisper.features import SAMPLE_RATE
 
 # The readings that end a sentence (the others stop mid-sentence: LJ Speech cuts the book's
 # sentences into pieces).

@@ -1,4 +1,4 @@
-"""The recognition timeout alone (speech_event/watchdog.py), on the fake clock."""
+"""The recognition timeout alone (speech_event/pipeline/watchdog.py), on the fake clock."""
 
 import logging
 import threading
@@ -9,8 +9,8 @@ import pytest
 
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.pipeline.recognition_queue import RecognitionJob
+from speech_event.pipeline.watchdog import Watchdog
 from speech_event.ports import Recognizer
-from speech_event.watchdog import Watchdog
 from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 

@@ -1,4 +1,4 @@
-"""The background runs alone (speech_event/background_runs.py): when a speculation or a partial
+"""The background runs alone (speech_event/turns/background_runs.py): when a speculation or a partial
 result starts, is cancelled, adopted or dropped, and what its outcome becomes.
 
 The node's side is stood in for: the utterance being collected and whether the worker is idle
@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
-from speech_event.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
-from speech_event.partials import PartialCounts
 from speech_event.pipeline.publication import TextOrigin
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
+from speech_event.pipeline.watchdog import Watchdog
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Recognizer, Transcript
-from speech_event.speculation import SpeculationCounts
-from speech_event.watchdog import Watchdog
+from speech_event.turns.background_runs import BackgroundRuns, UtteranceSoFar
+from speech_event.turns.partials import PartialCounts
+from speech_event.turns.speculation import SpeculationCounts
 from tests.helpers.fakes import SpyRecognizer
 
 CONFIG = SpeechEventConfig(

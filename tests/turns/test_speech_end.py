@@ -1,4 +1,4 @@
-"""Where the speech ended, heard in the samples alone (speech_event/speech_end.py)."""
+"""Where the speech ended, heard in the samples alone (speech_event/turns/speech_end.py)."""
 
 from typing import List, Optional, Tuple
 
@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise
-from speech_event.speech_end import AVERAGED_FRAMES, PAD_SECONDS, SpeechEnds
+from speech_event.turns.speech_end import AVERAGED_FRAMES, PAD_SECONDS, SpeechEnds
 
 RATE = 16000
 FRAME = 320  # 20 ms

@@ -1,4 +1,4 @@
-"""End of turn at the end of speech (``end_of_speech``, speech_event/end_of_turn.py) through the
+"""End of turn at the end of speech (``end_of_speech``, speech_event/turns/end_of_turn.py) through the
 node on the fake clock: the turn ends where the speech ended once the text up to there is complete,
 the room after it is not transcribed, speech that goes on is kept, and however long the engine
 takes, the same blocks give the same texts."""
@@ -22,7 +22,7 @@ from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SE
 from speech_event.messages import SetEnabledRequest, SetGrammarRequest
 from speech_event.ports import Recognizer, Stoppable, Transcript
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
-from speech_event.speech_end import AVERAGED_FRAMES
+from speech_event.turns.speech_end import AVERAGED_FRAMES
 from tests.helpers.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
 from tests.helpers.paths import ROOT
 from tests.helpers.rig import AT_16K, Rig
