@@ -16,7 +16,7 @@ SHARED_ONNX = "speech_event.recognizers.onnx"
 RECOGNIZERS = "speech_event.recognizers"
 # The ROS 1 client libraries and message packages, and where they may be imported: the adapters
 # (speech_event/adapters/ros*.py), the harness's ROS side (harness/ros/) and the benchmarks that
-# measure the node on a roscore (bench/ros*.py).
+# measure the node on a roscore (bench/figures/ros*.py).
 ROS = (
     "rospy",
     "actionlib",
@@ -28,7 +28,7 @@ ROS = (
     "rospkg",
     "std_msgs",
 )
-ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.ros")
+ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.figures.ros")
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,7 @@ def _circles(graph: Dict[str, Set[str]]) -> List[List[str]]:
 
 
 def test_the_modules_are_found_and_their_imports_read() -> None:
-    assert {"speech_event", "speech_event.node", "harness.ros.runner", "bench.asr"} <= set(MODULES)
+    assert {"speech_event", "speech_event.node", "harness.ros.runner", "bench.figures.asr"} <= set(MODULES)
     read = {(found.module, found.name) for found in IMPORTS}
     assert ("speech_event.node", "speech_event.config.SpeechEventConfig") in read
     assert ("harness.driver_node", "harness.ros.driver_side.ros_side") in read  # inside a function

@@ -1,9 +1,9 @@
-"""bench/end_of_speech.py's model of the robot's gate, which (e) measures splits and speculation
+"""bench/figures/end_of_speech.py's model of the robot's gate, which (e) measures splits and speculation
 behind, the pauses (f) counts splits against, and (f)'s four rules."""
 
 import numpy as np
 
-from bench.end_of_speech import BLOCK, RATE, gated, pauses_inside, turn_end_rules
+from bench.figures.end_of_speech import BLOCK, RATE, gated, pauses_inside, turn_end_rules
 from speech_event.config import SpeechEventConfig
 
 

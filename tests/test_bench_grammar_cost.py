@@ -1,11 +1,11 @@
-"""bench/grammar_cost.py's grammars and its account of where a recognition's CPU goes."""
+"""bench/figures/grammar_cost.py's grammars and its account of where a recognition's CPU goes."""
 
 import time
 
 import numpy as np
 
-from bench.grammar import COMMANDS, OUT_OF_GRAMMAR, lines
-from bench.grammar_cost import SAID_COMMANDS, WhereTheTimeGoes, grammars
+from bench.figures.grammar import COMMANDS, OUT_OF_GRAMMAR, lines
+from bench.figures.grammar_cost import SAID_COMMANDS, WhereTheTimeGoes, grammars
 from speech_event.recognizers.whisper import forced, model, recognizer
 
 

@@ -1,11 +1,11 @@
-"""bench/grammar.py --replay: a recorded run's neural decisions judged again with today's rule."""
+"""bench/figures/grammar.py --replay: a recorded run's neural decisions judged again with today's rule."""
 
 import json
 from pathlib import Path
 
 import pytest
 
-from bench.grammar import replay
+from bench.figures.grammar import replay
 
 
 def test_a_record_is_judged_again_by_todays_rule_and_pocketsphinx_lines_are_left_out(

@@ -1,7 +1,7 @@
-"""bench/robot_conclusions.py's tally: right, wrong (a yes or no nobody said) and missed (a yes or
+"""bench/figures/robot_conclusions.py's tally: right, wrong (a yes or no nobody said) and missed (a yes or
 no said, not concluded), by the Behaviour Controller's rule on what was said and what was published."""
 
-from bench.robot_conclusions import Conclusions
+from bench.figures.robot_conclusions import Conclusions
 
 
 def test_each_clip_counts_as_right_wrong_or_missed_by_the_controllers_rule() -> None:

@@ -1,11 +1,11 @@
-"""bench/mutation.sh's report, run by the script itself on the README's python3, with a stand-in
+"""bench/tools/mutation.sh's report, run by the script itself on the README's python3, with a stand-in
 for mutmut that answers with results the test makes up (a real mutation run takes minutes)."""
 
 import os
 import subprocess
 from pathlib import Path
 
-from bench.mutation_report import report
+from bench.tools.mutation_report import report
 from tests.helpers.paths import ROOT
 
 # mutmut 3 as the script calls it: run, then results with --all true (every mutant) and without
@@ -39,7 +39,7 @@ def test_the_mutation_script_prints_each_modules_score_the_overall_score_and_the
     mutmut.write_text(FAKE_MUTMUT, encoding="utf-8")
     mutmut.chmod(0o755)
     result = subprocess.run(
-        ["bash", str(ROOT / "bench" / "mutation.sh"), str(tmp_path / "python3")],
+        ["bash", str(ROOT / "bench" / "tools" / "mutation.sh"), str(tmp_path / "python3")],
         capture_output=True,
         text=True,
         encoding="utf-8",
