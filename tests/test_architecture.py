@@ -145,6 +145,18 @@ def test_no_modules_import_each_other() -> None:
     assert _circles(graph) == []
 
 
+def test_no_module_imports_another_modules_private_names() -> None:
+    """What two modules share is public in the one that owns it (or in a module of its own)."""
+    wrong = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found in IMPORTS
+        if _module_of(found.name) not in ("", found.module)
+        and found.name.rpartition(".")[2].startswith("_")
+        and not found.name.rpartition(".")[2].startswith("__")
+    ]
+    assert wrong == []
+
+
 def test_a_circle_is_found_however_long() -> None:
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"d"}, "f": {"g"}, "g": {"f"}}
     assert _circles(graph) == [["a", "b", "c"], ["f", "g"]]

@@ -29,9 +29,8 @@ from typing import Any, Dict, List
 
 import numpy as np
 
-from bench.parity.nemo_parity import SENTENCES, _as_16_bit
+from bench.parity.sentences import PARITY_SENTENCES, parity_audio
 from bench.parity.whisper_parity import random_checkpoint
-from fixtures.tts import speak_tts
 from speech_event.exporters.quantize import quantize_directory
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
@@ -173,7 +172,7 @@ def main(shapes: List[str]) -> int:
     from whisper.tokenizer import get_tokenizer
 
     work = Path(tempfile.mkdtemp(prefix="speech_event_whisper_optimum_"))
-    audio = [_as_16_bit(speak_tts(sentence, 16000)) for sentence in SENTENCES]
+    audio = parity_audio()
     tokenizer = get_tokenizer(True, num_languages=99, task="transcribe")
     all_same = True
     for shape in shapes or ["tiny", "base"]:
@@ -191,7 +190,7 @@ def main(shapes: List[str]) -> int:
             for precision in ("fp32", "int8")
         }
         matches, texts_same, int8_same, worst_no_speech, busy, seconds = 0, 0, 0, 0.0, 0.0, 0.0
-        for sentence, samples in zip(SENTENCES, audio):
+        for sentence, samples in zip(PARITY_SENTENCES, audio):
             theirs = _whisper_decode(model, samples)
             started = time.perf_counter()
             ours = engines["fp32"].decode(samples)
@@ -208,12 +207,12 @@ def main(shapes: List[str]) -> int:
             verdict = "same" if same else "DIFFERENT"
             print(f"  {sentence!r}: {verdict} ({len(theirs.tokens)} tokens from whisper)")
         print(
-            f"{shape}: {matches} of {len(SENTENCES)} utterances give whisper's own tokens, {texts_same} the "
+            f"{shape}: {matches} of {len(audio)} utterances give whisper's own tokens, {texts_same} the "
             f"transformers tokenizer's text; no_speech_prob differs by {worst_no_speech:.1e} at most; "
             f"int8 gives the fp32 tokens on {int8_same}; RTF {busy / seconds:.3f}",
             flush=True,
         )
-        all_same &= matches == texts_same == len(SENTENCES)
+        all_same &= matches == texts_same == len(PARITY_SENTENCES)
     return 0 if all_same else 1
 
 

@@ -23,8 +23,7 @@ from typing import Any, Dict, List
 
 import numpy as np
 
-from bench.parity.nemo_parity import SENTENCES, _as_16_bit
-from fixtures.tts import speak_tts
+from bench.parity.sentences import PARITY_SENTENCES, parity_audio
 from speech_event.exporters.whisper import export
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
@@ -94,7 +93,7 @@ def main(shapes: List[str]) -> int:
     import whisper
 
     work = Path(tempfile.mkdtemp(prefix="speech_event_whisper_"))
-    audio = [_as_16_bit(speak_tts(sentence, 16000)) for sentence in SENTENCES]
+    audio = parity_audio()
     all_same = True
     for shape in shapes or ["tiny", "base"]:
         checkpoint = random_checkpoint(shape, work / f"{shape}.pt")
@@ -107,7 +106,7 @@ def main(shapes: List[str]) -> int:
         )
         engine = WhisperRecognizer(work / shape, "english")
         matches, worst_mel, worst_no_speech, busy, seconds = 0, 0.0, 0.0, 0.0, 0.0
-        for sentence, samples in zip(SENTENCES, audio):
+        for sentence, samples in zip(PARITY_SENTENCES, audio):
             theirs, their_mel = _whisper_decode(model, samples)
             worst_mel = max(worst_mel, float(np.abs(whisper_log_mel(samples, 80) - their_mel).max()))
             started = time.perf_counter()
@@ -120,11 +119,11 @@ def main(shapes: List[str]) -> int:
             verdict = "same" if same else "DIFFERENT"
             print(f"  {sentence!r}: {verdict} ({len(theirs.tokens)} tokens from whisper)")
         print(
-            f"{shape}: {matches} of {len(SENTENCES)} utterances give whisper's own tokens; log-mel differs "
+            f"{shape}: {matches} of {len(audio)} utterances give whisper's own tokens; log-mel differs "
             f"by {worst_mel:.1e} at most, no_speech_prob by {worst_no_speech:.1e}; RTF {busy / seconds:.3f}",
             flush=True,
         )
-        all_same &= matches == len(SENTENCES)
+        all_same &= matches == len(PARITY_SENTENCES)
     return 0 if all_same else 1
 
 

@@ -17,7 +17,8 @@ import time
 from pathlib import Path
 from typing import Callable, Dict, List
 
-from bench.parity.nemo_parity import SENTENCES, _biased, _config, _conformer_rnnt, _tokenizer
+from bench.parity.random_nemo import biased, conformer_rnnt, nemo_config, tokenizer_directory
+from bench.parity.sentences import PARITY_SENTENCES
 from bench.parity.whisper_parity import random_checkpoint
 from speech_event.exporters.nemo import export_model
 from speech_event.exporters.whisper import export as export_whisper
@@ -27,7 +28,7 @@ def _tokenizer_of(size: int, work: Path) -> Path:
     import sentencepiece
 
     corpus = work / "corpus.txt"
-    words = " ".join(SENTENCES).split()
+    words = " ".join(PARITY_SENTENCES).split()
     # enough distinct text for a vocabulary of this size: every pair of words, spelled out
     corpus.write_text("\n".join(f"{a}{b} {b}{a} {a} {b}" for a in words for b in words))
     sentencepiece.SentencePieceTrainer.train(
@@ -46,8 +47,8 @@ def _tokenizer_of(size: int, work: Path) -> Path:
 
 
 def conformer_large(out: Path, work: Path) -> None:
-    model = _conformer_rnnt(_tokenizer(work))  # the parity bench's conformer-transducer large
-    _biased(model)
+    model = conformer_rnnt(tokenizer_directory(work))  # the parity bench's conformer-transducer large
+    biased(model)
     export_model(model, out)
 
 
@@ -55,12 +56,12 @@ def parakeet_tdt_06b(out: Path, work: Path) -> None:
     from nemo.collections.asr.models import EncDecRNNTBPEModel
     from omegaconf import OmegaConf
 
-    config = _config(_tokenizer_of(1024, work), fast=True, tdt=True)
+    config = nemo_config(_tokenizer_of(1024, work), fast=True, tdt=True)
     config["preprocessor"] = {**config["preprocessor"], "features": 128}
     config["encoder"].update(feat_in=128, n_layers=24, d_model=1024)
     config["model_defaults"].update(enc_hidden=1024)
     model = EncDecRNNTBPEModel(cfg=OmegaConf.create(config))
-    _biased(model)
+    biased(model)
     export_model(model, out)
 
 
