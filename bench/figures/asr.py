@@ -26,7 +26,7 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from bench.figures import int8
-from bench.figures.measures import COMMANDS, peak_mib, word_errors
+from bench.figures.measures import peak_mib, robot_commands, word_errors
 from fixtures.audio import noise, speak_tones
 from fixtures.tones_model import build_tones_model
 from fixtures.transducer_model import build_random_transducer
@@ -62,14 +62,15 @@ def score(recognizer: Recognizer, samples: Sequence[Tuple[str, np.ndarray]]) -> 
 
 
 def commands() -> None:
-    samples = [(command, speak_tts(command, 16000)) for command in COMMANDS]
-    grammar = phrases_grammar(list(COMMANDS), "the commands")
+    commands = robot_commands()
+    samples = [(command, speak_tts(command, 16000)) for command in commands]
+    grammar = phrases_grammar(commands, "the commands")
     for mode, recognizer in (
         ("language model", SphinxRecognizer()),
         ("grammar", SphinxRecognizer(grammar=grammar)),
     ):
         wer, rtf = score(recognizer, samples)
-        print(f"pocketsphinx, {len(COMMANDS)} tts commands, {mode}: WER {wer:.3f}, RTF {rtf:.3f}")
+        print(f"pocketsphinx, {len(commands)} tts commands, {mode}: WER {wer:.3f}, RTF {rtf:.3f}")
 
 
 def recorded_speech() -> None:
@@ -158,7 +159,7 @@ def one_family_model(directory: Path) -> None:
     started = time.perf_counter()
     engine = _family_engine(directory, cuda=False)
     loaded = time.perf_counter() - started
-    speech = np.concatenate([speak_tts(command, 16000) for command in COMMANDS])
+    speech = np.concatenate([speak_tts(command, 16000) for command in robot_commands()])
     figures = []
     for seconds in (5, 10):
         audio = speech[: seconds * 16000]

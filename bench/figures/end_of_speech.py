@@ -67,11 +67,13 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tupl
 
 import numpy as np
 
-from bench.figures.grammar import COMMANDS, DIGITS, ENGINES, SPEAKERS, lines
+from bench.figures.grammar import DIGITS, ENGINES, SPEAKERS
+from bench.figures.measures import robot_commands
 from fixtures.festival import speak_festival
 from fixtures.noises import at_level, read_audio, rms
 from fixtures.recordings import FSDD, RAW_UTTERANCES, SAMPLE_RATE, cards, librivox, ljspeech, raw_utterance
 from harness.catalog import ScenarioEngines, engine_for
+from harness.cli import COMMANDS
 from harness.processes import wait_until
 from speech_event.adapters.executors import ClockExecutor, ThreadExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -591,7 +593,7 @@ def measure_gate_speculation(
 def measure_texts(engine: Recognizer, setting: float) -> None:
     base = turned_off(SpeechEventConfig(health_check_period=3600.0))
     on = dataclasses.replace(base, end_of_speech=setting)
-    phrases = lines(COMMANDS)
+    phrases = robot_commands()
     for grammar_name, grammar in (("grammar", str(COMMANDS)), ("free speech", "")):
         for mode in MODES:
             changed = 0
@@ -607,7 +609,7 @@ def measure_texts(engine: Recognizer, setting: float) -> None:
 def measure_detector(setting: float) -> None:
     for mode in MODES:
         early, never, after = 0, 0, []
-        for index, phrase in enumerate(lines(COMMANDS)):
+        for index, phrase in enumerate(robot_commands()):
             audio, end = said(festival_speech(phrase), mode, index)
             ends = SpeechEnds(RATE, setting)
             for start in range(0, audio.size, BLOCK):
@@ -645,12 +647,12 @@ def main() -> None:
     parser.add_argument("--rules", action="store_true", help="(f) only: the four rules in free speech")
     arguments = parser.parse_args()
     if arguments.detector:
-        print(f"(c) the detector, end_of_speech {arguments.setting}, {len(lines(COMMANDS))} commands (slt)")
+        print(f"(c) the detector, end_of_speech {arguments.setting}, {len(robot_commands())} commands (slt)")
         measure_detector(arguments.setting)
         return
     recognizer, quantization = ENGINES[arguments.engine]
     config = SpeechEventConfig(quantization=quantization or "none")
-    commands = [festival_speech(phrase) for phrase in lines(COMMANDS)[: arguments.phrases]]
+    commands = [festival_speech(phrase) for phrase in robot_commands()[: arguments.phrases]]
     sets = (
         [SpeechSet("grammar", str(COMMANDS), commands), SpeechSet("free speech", "", commands)]
         if commands
@@ -670,7 +672,7 @@ def main() -> None:
         engine = engines.build()
         engine.transcribe(np.zeros(16000, np.float32))  # loaded and warm before anything is timed
         if arguments.texts:
-            print(f"(d) {arguments.engine}: texts of all {len(lines(COMMANDS))} commands, off against on")
+            print(f"(d) {arguments.engine}: texts of all {len(robot_commands())} commands, off against on")
             measure_texts(engine, arguments.setting)
             return
         grammar, mode = (

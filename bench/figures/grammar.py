@@ -60,6 +60,7 @@ from typing import Callable, Dict, List, Optional, Protocol, Sequence, TextIO, T
 
 import numpy as np
 
+from bench.figures.measures import robot_commands
 from bench.figures.speaker_pitch import speech_commands_voices
 from fixtures import recordings
 from fixtures.festival import VOICES as FESTIVAL_VOICES
@@ -68,6 +69,7 @@ from fixtures.noises import at_level, read_audio, under
 from fixtures.recordings import FSDD, SPEECH_COMMANDS
 from fixtures.tts import speak_tts
 from harness.catalog import BASE, TINY_EN, ScenarioEngines
+from harness.cli import COMMANDS
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
@@ -83,7 +85,6 @@ from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
 from speech_event.topics import SIGNAL_TOPIC, SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
 
 ROOT = Path(__file__).resolve().parents[2]
-COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
 OUT_OF_GRAMMAR = ROOT / "bench" / "data" / "out_of_grammar.txt"
 RATE = 48000  # what soundDetection publishes
 BLOCK = 4096
@@ -282,7 +283,7 @@ def report(name: str, tally: Tally) -> None:
 
 def spoken_set(voice: str) -> List[Sample]:
     speak = VOICES[voice]
-    samples: List[Sample] = [(command, speak(command, RATE)) for command in lines(COMMANDS)]
+    samples: List[Sample] = [(command, speak(command, RATE)) for command in robot_commands()]
     return samples + [(None, speak(sentence, RATE)) for sentence in lines(OUT_OF_GRAMMAR)]
 
 
@@ -300,7 +301,7 @@ def cards_grammar(engine: str) -> str:
     cards' phrases among the robot's commands."""
     if engine == "pocketsphinx":
         return str(recordings.CARDS_GRAMMAR)
-    return "|".join([recording.text for recording in recordings.cards()] + lines(COMMANDS))
+    return "|".join([recording.text for recording in recordings.cards()] + robot_commands())
 
 
 SPEAKERS = ("george", "jackson", "lucas")
@@ -410,7 +411,7 @@ def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
                     count(tally, word, as_digit(run.say(audio)), None)
                 report(f"(c) no grammar: the digit written, {speaker}, margin {margin} s", tally)
         for label, grammar, phrases in (
-            ("commands", str(COMMANDS), lines(COMMANDS)),
+            ("commands", str(COMMANDS), robot_commands()),
             ("yes|no", "yes|no", ["yes", "no"]),
         ):
             run.use_grammar(grammar)
@@ -419,7 +420,7 @@ def run_people(name: str, takes: int, record: Optional[TextIO]) -> None:
                 report(f"(c) single words against {label}, margin {margin} s", tally)
         run.use_grammar(str(COMMANDS))
         for kind in ("pink", "babble"):
-            said = people_words(MARGINS[1], lines(COMMANDS), kind)
+            said = people_words(MARGINS[1], robot_commands(), kind)
             tally = judge(run, said, record, f"{name} words commands {kind} {NOISY_SNR_DB:.0f} dB")
             report(f"(c) single words against commands, {kind} noise {NOISY_SNR_DB:.0f} dB under them", tally)
         for kind in ("pink", "babble"):

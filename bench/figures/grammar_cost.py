@@ -34,7 +34,8 @@ from typing import Any, Callable, Dict, Iterator, List, Sequence, Tuple
 import numpy as np
 
 from bench.figures.end_of_speech import after_each_other, gated, played_in_real_time, played_on_fake_clock
-from bench.figures.grammar import COMMANDS, DIGITS, ENGINES, OUT_OF_GRAMMAR, RATE, in_the_room, lines
+from bench.figures.grammar import DIGITS, ENGINES, OUT_OF_GRAMMAR, RATE, in_the_room, lines
+from bench.figures.measures import robot_commands
 from fixtures.festival import speak_festival
 from fixtures.noises import read_audio
 from fixtures.recordings import SPEECH_COMMANDS
@@ -62,7 +63,7 @@ MARGIN = 0.5
 
 def grammars() -> Dict[str, str]:
     """The grammars by name, as set_grammar takes them ("" is free speech)."""
-    commands, others = lines(COMMANDS), lines(OUT_OF_GRAMMAR)
+    commands, others = robot_commands(), lines(OUT_OF_GRAMMAR)
     hundred = commands + others[:-8] + [f"go to table {number}" for number in TABLES]
     assert len(set(hundred)) == 100, len(set(hundred))
     return {

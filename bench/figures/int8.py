@@ -28,7 +28,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from bench.figures.measures import COMMANDS, peak_mib, resident_mib, word_errors
+from bench.figures.measures import peak_mib, resident_mib, robot_commands, word_errors
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
 from speech_event.exporters.quantize import quantize_directory
@@ -45,7 +45,7 @@ RUNS = 3
 
 
 def _speech() -> np.ndarray:
-    return np.concatenate([speak_tts(command, 16000) for command in COMMANDS])[: SECONDS * 16000]
+    return np.concatenate([speak_tts(command, 16000) for command in robot_commands()])[: SECONDS * 16000]
 
 
 def _engine(directory: Path, quantization: str) -> Recognizer:
@@ -112,15 +112,16 @@ def _run(runtime: str, directory: Path, quantization: str, cores: int) -> Option
 def _agreement(directory: Path) -> str:
     """How often int8 says what fp32 says, each command an utterance of its own."""
     fp32, int8 = _engine(directory, "none"), _engine(directory, "int8")
+    commands = robot_commands()
     same = edits = words = 0
-    for command in COMMANDS:
+    for command in commands:
         audio = speak_tts(command, 16000)
         said, quantized = fp32.transcribe(audio).text, int8.transcribe(audio).text
         same += said == quantized
         errors, count = word_errors(said, quantized)
         edits, words = edits + errors, words + count
     agreement = 1 - edits / words if words else 1.0
-    return f"int8 says what fp32 says on {same}/{len(COMMANDS)} utterances, word agreement {agreement:.3f}"
+    return f"int8 says what fp32 says on {same}/{len(commands)} utterances, word agreement {agreement:.3f}"
 
 
 def _line(name: str, quantization: str, cores: int, directory: Path, rounds: int) -> str:

@@ -42,6 +42,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from bench.figures.measures import robot_commands
 from fixtures.audio import speak_tones
 from fixtures.recordings import SAMPLE_RATE, librivox
 from fixtures.tts import speak_tts
@@ -129,8 +130,7 @@ def _speech(voice: str, seconds: float) -> np.ndarray:
     """About ``seconds`` of speech: phrases in the voice, one after another, cut to length."""
     if voice == "recorded":
         return _recorded(seconds)[: int(seconds * RATE)].astype(np.float32)
-    lines = [line.strip() for line in COMMANDS.read_text().splitlines()]
-    phrases = [line for line in lines if line and not line.startswith("#")]
+    phrases = robot_commands()
     if voice != "tts":
         phrases = ["go to the kitchen please"]
     parts: List[np.ndarray] = []

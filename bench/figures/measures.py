@@ -1,6 +1,6 @@
-"""What the engine figures share (asr.py, int8.py, sphinx_process.py and whisper_runtime.py beside
-it): the robot commands they speak, word errors against a reference, this process's memory, and how
-long an engine keeps the other threads from running."""
+"""What the figure benches share: the robot's commands they speak and judge against (one list, the
+robot's grammar file), word errors against a reference, this process's memory, and how long an
+engine keeps the other threads from running."""
 
 import threading
 import time
@@ -10,42 +10,15 @@ from typing import List, Tuple
 import numpy as np
 
 from fixtures.recordings import word_errors as recorded_word_errors
+from harness.cli import COMMANDS
+from speech_event.grammar import load_grammar
 from speech_event.ports import Recognizer
 
-COMMANDS = [
-    "hello pepper",
-    "goodbye",
-    "thank you",
-    "yes",
-    "no",
-    "stop",
-    "follow me",
-    "come here",
-    "turn left",
-    "turn right",
-    "go forward",
-    "go back",
-    "go to the kitchen",
-    "go to the living room",
-    "go to the door",
-    "open the door",
-    "close the door",
-    "bring me the red cup",
-    "bring me the blue cup",
-    "put it on the table",
-    "pick up the ball",
-    "what time is it",
-    "what is your name",
-    "how are you",
-    "tell me a story",
-    "play some music",
-    "turn on the light",
-    "turn off the light",
-    "sit down",
-    "stand up",
-    "look at me",
-    "wave your hand",
-]
+
+def robot_commands() -> List[str]:
+    """The robot's command phrases as the node reads its grammar file (harness/data/robot_commands.txt,
+    the demo's grammar): the one list of commands every bench speaks and judges against."""
+    return list(load_grammar(COMMANDS).sentences("a bench"))
 
 
 def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:

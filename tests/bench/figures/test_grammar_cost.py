@@ -4,8 +4,9 @@ import time
 
 import numpy as np
 
-from bench.figures.grammar import COMMANDS, OUT_OF_GRAMMAR, lines
+from bench.figures.grammar import OUT_OF_GRAMMAR, lines
 from bench.figures.grammar_cost import SAID_COMMANDS, WhereTheTimeGoes, grammars
+from bench.figures.measures import robot_commands
 from speech_event.recognizers.whisper import forced, model, recognizer
 
 
@@ -14,7 +15,7 @@ def test_the_grammars_are_free_speech_yes_no_the_robots_commands_and_a_hundred_p
     assert list(chosen) == ["none", "yes|no", "32 commands", "100 phrases"]
     assert chosen["none"] == "" and chosen["yes|no"] == "yes|no"
     commands = chosen["32 commands"].split("|")
-    assert commands == lines(COMMANDS) and len(commands) == 32
+    assert commands == robot_commands() and len(commands) == 32
     hundred = chosen["100 phrases"].split("|")
     assert len(hundred) == len(set(hundred)) == 100 and hundred[:32] == commands
     # what the voice says outside the grammars is in none of them, and its commands in the two big ones
