@@ -17,8 +17,8 @@ same tokens, and the confidence (exp of NeMo's hypothesis score). The models:
 - fastconformer-ctc: a plain FastConformer CTC model (EncDecCTCModelBPE).
 
 Their output layers are scaled up and their blanks biased, so that near-ties decide nothing and
-blanks and emissions mix. Prints each engine's real-time
-factor on these models too. The exported directories are left under /tmp/speech_event_parity_*.
+blanks and emissions mix. Prints each engine's real-time factor on these models too. The exported
+directories are left under /tmp/speech_event_parity_*.
 """
 
 import dataclasses
