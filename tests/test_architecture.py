@@ -17,7 +17,7 @@ SHARED_ONNX = "speech_event.recognizers.onnx"
 RECOGNIZERS = "speech_event.recognizers"
 # The ROS 1 client libraries and message packages, and where they may be imported: the adapters
 # (speech_event/adapters/ros*.py), the harness's ROS side (harness/ros/) and the benchmarks that
-# measure the node on a roscore (bench/ros*.py).
+# measure the node on a roscore (bench/figures/ros*.py).
 ROS = (
     "rospy",
     "actionlib",
@@ -29,7 +29,7 @@ ROS = (
     "rospkg",
     "std_msgs",
 )
-ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.ros")
+ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.figures.ros")
 # The node library's layers, lowest first: a module imports from its own layer or those below it.
 # The base (the ports, the configuration, messages and grammars) knows no engine; the engines know
 # no node; the robot's interfaces know no pipeline; the pipeline, message in to text out, knows no
@@ -145,7 +145,7 @@ def _circles(graph: Dict[str, Set[str]]) -> List[List[str]]:
 
 
 def test_the_modules_are_found_and_their_imports_read() -> None:
-    assert {"speech_event", "speech_event.node", "harness.ros.runner", "bench.asr"} <= set(MODULES)
+    assert {"speech_event", "speech_event.node", "harness.ros.runner", "bench.figures.asr"} <= set(MODULES)
     read = {(found.module, found.name) for found in IMPORTS}
     assert ("speech_event.node", "speech_event.config.SpeechEventConfig") in read
     assert ("harness.driver_node", "harness.ros.driver_side.ros_side") in read  # inside a function
@@ -229,6 +229,18 @@ def test_no_modules_import_each_other() -> None:
         if target and target != found.module:
             graph[found.module].add(target)
     assert _circles(graph) == []
+
+
+def test_no_module_imports_another_modules_private_names() -> None:
+    """What two modules share is public in the one that owns it (or in a module of its own)."""
+    wrong = [
+        f"{found.module}:{found.line} imports {found.name}"
+        for found in IMPORTS
+        if _module_of(found.name) not in ("", found.module)
+        and found.name.rpartition(".")[2].startswith("_")
+        and not found.name.rpartition(".")[2].startswith("__")
+    ]
+    assert wrong == []
 
 
 def test_a_circle_is_found_however_long() -> None:

@@ -8,13 +8,13 @@ quantized: the matrix products hold most of these models' weights (a conformer's
 attention layers, Whisper's blocks), and the decoders' LSTM and embeddings stay exact, but for a
 table a product reads too (below). Products inside a control-flow node's branches are quantized too
 (optimum's merged Whisper decoder).
-bench/asr.py measures what it gains and what it changes.
+bench/figures/asr.py measures what it gains and what it changes.
 
 The weights are signed 7-bit numbers with a scale per output column (Int8Scheme): the same
 results on every x86-64 CPU, at int8's speed. onnxruntime picks its int8 kernels by CPU, and AVX2's
 kernel for unsigned activations by signed weights adds pairs of products in 16 bits, which saturate
 with 8-bit weights (255 x 127 x 2 > 32767) but not with 7-bit ones (255 x 64 x 2 < 32767): measured
-under qemu as a Haswell (bench/int8_cpus.py), a random Whisper's logits moved 5x as far from fp32
+under qemu as a Haswell (bench/figures/int8_cpus.py), a random Whisper's logits moved 5x as far from fp32
 as on an AVX-512 VNNI CPU with onnxruntime's default (8-bit, one scale a matrix), 27x with 8-bit
 per-column scales, and exactly as far with 7-bit ones. Unsigned weights do not saturate either,
 but take a slower kernel: trained tiny.en decoded 1.36x as long on this CPU.
@@ -22,7 +22,7 @@ but take a slower kernel: trained tiny.en decoded 1.36x as long on this CPU.
 A table that is both a product's weight and gathered from (Whisper's tied token embedding: the
 logits' weight and the tokens' lookup) is gathered from its int8 version too, then dequantized, so
 the file holds it once, in int8: the fp32 table was 80 of tiny.en's 109 MB int8 decoder, and 106 of
-base's 156 (bench/whisper_peer.py measures the memory it saves). An fp32 file's lookup of an exact
+base's 156 (bench/figures/whisper_peer.py measures the memory it saves). An fp32 file's lookup of an exact
 float16 copy of the table (exporters/whisper_graphs.py says why) is made a lookup of the table
 itself first, so the int8 file holds neither copy.
 """

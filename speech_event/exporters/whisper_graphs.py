@@ -15,7 +15,7 @@ here the scale is folded into their projections' weights. The encoder's self-att
 onnxruntime MultiHeadAttention node (com.microsoft), which scales by head width ** -0.5 itself: its
 CPU kernel never holds a head's 1500 x 1500 scores twice, as MatMul, Softmax, MatMul do, and since
 onnxruntime 1.19 it attends in blocks (flash attention) and holds none. That was most of what an
-int8 tiny.en held at its peak besides its weights (bench/whisper_peer.py measures it). GELU is
+int8 tiny.en held at its peak besides its weights (bench/figures/whisper_peer.py measures it). GELU is
 erf's (whisper's nn.GELU), written as torch.onnx writes it, a pattern onnxruntime fuses into one
 kernel.
 

@@ -19,7 +19,7 @@ plus the weighted grammar or language-model log-probabilities and insertion pena
 ``rejected`` names the phrase. The grammars are searched with beams wider than pocketsphinx's
 (_GRAMMAR_SETTINGS), so that the phrase is the grammar's most likely, not one a pruned search
 happened to keep. Not per second, like the neural engines' ratio: a wrong word costs
-about the same in a long command as in a short one; and on the sets of bench/grammar.py the worst
+about the same in a long command as in a short one; and on the sets of bench/figures/grammar.py the worst
 command against the best near miss, tts voice, -62 against -121 nats in total, -75 against -106
 nats per second.
 
@@ -47,7 +47,7 @@ from speech_event.grammar import Grammar
 from speech_event.ports import Transcript
 
 SAMPLE_RATE = 16000
-# nats (the ratio above). bench/grammar.py through the node, pocketsphinx 5.1.1 and its en-us model,
+# nats (the ratio above). bench/figures/grammar.py through the node, pocketsphinx 5.1.1 and its en-us model,
 # each utterance decoded afresh (_start_afresh), the robot's 32 commands and 65 other sentences in
 # four voices (issue 32): commands -59 to +57 in espeak's voice, down to -113 in festival's kal and
 # -143 in ked; other speech at most -115 (espeak), -107 (kal: "bring me the red book"), -168 (ked),

@@ -52,7 +52,7 @@ class EndOfTurn:
         is one that cannot be stopped (pocketsphinx), which decides once an utterance. Each
         decision is a decoding of the whole utterance so far that runs to its end, and under
         babble an end is heard again and again: deciding each, a rejection came up to 9 s later
-        than at the pause (bench/end_of_speech.py)."""
+        than at the pause (bench/figures/end_of_speech.py)."""
         self.on = ends_at_end_of_speech(config)
         hangover = end_of_speech_seconds(config) or config.speech_pause_period
         self._ends = SpeechEnds(config.sample_rate, hangover)

@@ -223,7 +223,7 @@ def decides_at_end_of_speech(
     utterance so far, and its text is never a closed sentence (it writes no punctuation), so the
     turn would end at the pause anyway; its free decoding of a command and a second of babble after
     it takes 2.1 s, and a decision at each end heard in it kept the text up to 15 s late
-    (bench/end_of_speech.py).
+    (bench/figures/end_of_speech.py).
     ``hears_turn_end`` (turn_end_model set): in free speech an engine that can be stopped decides
     too, the turn ending only where the audio says it is complete as well (SpeculationRules)."""
     stoppable = isinstance(recognizer, Stoppable)

@@ -10,7 +10,7 @@ speech has ended once ``hangover`` seconds of frames that are not speech follow 
 speech frames; the cut keeps ``pad`` seconds after the last one (a word's quiet tail). Measured on
 festival's slt saying the robot's 32 commands under pink noise at 10 dB SNR, these settings with a
 0.2 s pad cut one of them 0.03 s before the end of its last word (at -40 dBFS) and no other before
-it (python -m bench.end_of_speech --detector); the unaveraged frames with the lowest as the floor
+it (python -m bench.figures.end_of_speech --detector); the unaveraged frames with the lowest as the floor
 cut two (0.05 and 0.12 s early), a 3 or 4 dB margin or a 60 ms average cut four to six.
 
 Every decision is a function of the samples alone, in float64: the same audio gives the same end

@@ -169,7 +169,7 @@ def test_export_whisper_int8_writes_the_int8_files_the_engine_runs(
     # (an AVX2 CPU and an AVX-512 one chose differently), so the tokens are not compared with fp32's:
     # along fp32's text, int8's logits are off by int8's error, far less than their spread, on every
     # x86-64 CPU (3.3 % of the largest here and under qemu as a Haswell; the 8-bit weights that AVX2
-    # saturates on: 13 % there, bench/int8_cpus.py), and not exactly fp32's (int8 ran)
+    # saturates on: 13 % there, bench/figures/int8_cpus.py), and not exactly fp32's (int8 ran)
     exact, quantized = _teacher_forced(fp32, mel, prompt, text), _teacher_forced(int8, mel, prompt, text)
     assert 0 < np.abs(quantized - exact).max() < 0.06 * np.abs(exact).max()
     # the engine, told int8, decodes those graphs greedily: its tokens are the reference's, on this CPU

@@ -1,4 +1,4 @@
-"""The export tool's own steps (NeMo itself is not installed in CI; bench/nemo_parity.py runs it)."""
+"""The export tool's own steps (NeMo itself is not installed in CI; bench/parity/nemo_parity.py runs it)."""
 
 from pathlib import Path
 

@@ -197,7 +197,7 @@ def test_women_saying_digits_are_published_in_the_digits_grammar_and_not_as_a_ro
     tiny_en: Path,
 ) -> None:
     """Issue 43, Speech Commands' digits (16 kHz) by four speakers whose voices are likely women's
-    (192 to 213 Hz, bench/speaker_pitch.py), with 0.2 s of room noise: written as the digit, or
+    (192 to 213 Hz, bench/figures/speaker_pitch.py), with 0.2 s of room noise: written as the digit, or
     eight as " Oh" (the digit the most probable phrase, +8.0 over its score against silence,
     ONE_WORD_EVIDENCE 7): published in the digits grammar; against the robot's commands, where no
     digit is a phrase, all rejected."""
@@ -250,7 +250,7 @@ def test_a_word_under_babble_written_near_a_phrase_is_not_published_without_the_
 
 
 def in_the_room(speech: np.ndarray, seed_name: str) -> np.ndarray:
-    """``speech`` (16 kHz) with 0.2 s of pink noise at -50 dBFS before and after, as bench/grammar.py."""
+    """``speech`` (16 kHz) with 0.2 s of pink noise at -50 dBFS before and after, as bench/figures/grammar.py."""
     rng = np.random.default_rng(zlib.crc32(seed_name.encode()))
     room = [at_level("pink", 3200, -50.0, 16000, rng) for _ in range(2)]
     return np.concatenate([room[0], speech, room[1]])

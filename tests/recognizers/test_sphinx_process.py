@@ -10,7 +10,7 @@ from typing import Iterator, List, Optional, Tuple, Union
 import numpy as np
 import pytest
 
-from bench.measures import longest_stall
+from bench.figures.measures import longest_stall
 from fixtures import recordings
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import GrammarError, ModelError

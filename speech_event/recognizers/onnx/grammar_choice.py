@@ -31,7 +31,7 @@ for stop), the said word 0.6 to 5.4 nats less probable than that; other words he
 +5.6 evidence for the nearest command, the said ones +6.0 to +10.9. A free text of more words than
 the phrase is a near miss ("Don't stop." for stop: +8.2), never taken so.
 
-Why no more (issue 32, measured with trained Whisper tiny.en and base through bench/grammar.py):
+Why no more (issue 32, measured with trained Whisper tiny.en and base through bench/figures/grammar.py):
 the ratio alone let a third of everyday speech through as a command. A short phrase the model
 favours ("thank you") scores within a few nats of the free decoding of any speech the model is
 unsure of, and above it for speech it mishears badly (espeak's "follow the car", freely "fadl

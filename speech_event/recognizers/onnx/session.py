@@ -24,7 +24,7 @@ def _heap_trim() -> Optional[Callable[[int], int]]:
 
 # Loading a model parses its whole file, and glibc keeps the heap that parsing frees for later:
 # the large conformer's int8 model held 288 MiB after loading, 214 once malloc_trim gave that
-# heap back to the system (bench/int8.py).
+# heap back to the system (bench/figures/int8.py).
 _TRIM_HEAP = _heap_trim()
 
 

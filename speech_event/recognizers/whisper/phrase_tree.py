@@ -25,7 +25,7 @@ from speech_event.recognizers.whisper.manifest import WhisperManifest
 from speech_event.recognizers.whisper.model import Decoding
 
 # An int8 decoder quantizes each call's activations by their own range, so a form run in stretches
-# scores a little otherwise than in one call (up to 0.27 nats, tiny.en int8 on bench.grammar's
+# scores a little otherwise than in one call (up to 0.27 nats, tiny.en int8 on bench.figures.grammar's
 # sets). The tree prunes only this far under what may decide, and each form that may is scored
 # again in one call of its own, as forced.score_phrases scores it: the decision sees the same
 # scores whatever the tree's shape.

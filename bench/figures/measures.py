@@ -1,0 +1,69 @@
+"""What the figure benches share: the robot's commands they speak and judge against (one list, the
+robot's grammar file), word errors against a reference, this process's memory, and how long an
+engine keeps the other threads from running."""
+
+import threading
+import time
+from pathlib import Path
+from typing import List, Tuple
+
+import numpy as np
+
+from fixtures.recordings import word_errors as recorded_word_errors
+from harness.cli import COMMANDS
+from speech_event.grammar import load_grammar
+from speech_event.ports import Recognizer
+
+
+def robot_commands() -> List[str]:
+    """The robot's command phrases as the node reads its grammar file (harness/data/robot_commands.txt,
+    the demo's grammar): the one list of commands every bench speaks and judges against."""
+    return list(load_grammar(COMMANDS).sentences("a bench"))
+
+
+def word_errors(reference: str, hypothesis: str) -> Tuple[int, int]:
+    """(word edits, reference words) between two texts' words as they are written."""
+    return recorded_word_errors(reference.split(), hypothesis.split())
+
+
+def peak_mib() -> float:
+    """This process's peak resident memory: VmHWM, which starts afresh at exec (ru_maxrss does not:
+    it would carry the parent's peak, the quantizer's among it)."""
+    return _status_mib("VmHWM")
+
+
+def resident_mib() -> float:
+    """This process's resident memory now (VmRSS)."""
+    return _status_mib("VmRSS")
+
+
+def _status_mib(field: str) -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(f"{field}:"):
+            return int(line.split()[1]) / 1024
+    raise RuntimeError(f"no {field} in /proc/self/status")
+
+
+def longest_stall(engine: Recognizer, audio: np.ndarray) -> float:
+    """The longest a thread waking every 5 ms waited for its turn while ``engine`` transcribed
+    ``audio``: how long the engine kept the node's other threads (timers, callbacks) from running."""
+    ticks: List[float] = []
+    done = threading.Event()
+
+    def tick() -> None:
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    ticker = threading.Thread(target=tick)
+    ticker.start()
+    time.sleep(0.05)
+    began = time.perf_counter()
+    engine.transcribe(audio)
+    ended = time.perf_counter()
+    time.sleep(0.05)
+    done.set()
+    ticker.join()
+    return max(
+        later - earlier for earlier, later in zip(ticks, ticks[1:]) if later > began and earlier < ended
+    )
