@@ -10,7 +10,7 @@ python="${PYTHON:-.tox/py/bin/python}"
 grep -qw avx512f /proc/cpuinfo && echo "this CPU has AVX-512; the tests run as an AVX2 CPU without it"
 # pytest's faulthandler would take SIGSEGV, which answers CPUID here
 tests=(-m pytest -p no:cacheprovider -p no:xdist -p no:faulthandler -q
-    tests/exporters tests/recognizers tests/test_pull.py -k "int8 or quantiz" "$@")
+    tests/exporters tests/recognizers tests/models/test_pull.py -k "int8 or quantiz" "$@")
 if [[ "${QEMU:-0}" == 1 ]]; then
     exec qemu-x86_64 -cpu Haswell-v4 "$python" "${tests[@]}"
 fi
