@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
+from fixtures.application import run_application
+from fixtures.paths import ROOT
 from speech_event.config import SpeechEventConfig, load_config, parse_config
 from speech_event.errors import ConfigError
-from tests.helpers.application import run_application
-from tests.helpers.paths import ROOT
 
 
 def _elsewhere(tmp_path: Path, *command: str) -> "subprocess.CompletedProcess[str]":

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Iterator, List, Set
 
-from tests.helpers.paths import ROOT
+from fixtures.paths import ROOT
 
 PACKAGES = ("speech_event", "harness", "bench")
 SHARED_ONNX = "speech_event.recognizers.onnx"

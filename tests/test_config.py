@@ -6,6 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from fixtures.application import run_application
+from fixtures.paths import ROOT
 from speech_event.config import (
     DECIDING_SPECULATION_GAP,
     GRAMMAR_END_OF_SPEECH,
@@ -21,8 +23,6 @@ from speech_event.config import (
     parse_config,
     speculation_gap_seconds,
 )
-from tests.helpers.application import run_application
-from tests.helpers.paths import ROOT
 
 
 def test_a_file_sets_keys_in_every_accepted_form_and_leaves_the_rest_at_defaults() -> None:

@@ -1,15 +1,15 @@
 """Every hermetic scenario file passes in memory, and publishes the same with speculation and partial
-results off (tests/helpers/every_scenario.py says exactly what is compared)."""
+results off (fixtures/every_scenario.py says exactly what is compared)."""
 
 from pathlib import Path
 
 import pytest
 
-from tests.helpers.every_scenario import (
+from fixtures.every_scenario import (
     RECOGNITION_SECONDS,
     check_scenario_with_and_without_speculation_and_partials,
 )
-from tests.helpers.scenario_files import SCENARIOS
+from fixtures.scenario_files import SCENARIOS
 
 
 @pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)

@@ -4,9 +4,9 @@ from pathlib import Path
 
 import pytest
 
+from fixtures.paths import ROOT
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import MAX_SENTENCES, jsgf_grammar, load_grammar, phrases_grammar, requested_grammar
-from tests.helpers.paths import ROOT
 
 CARDS = Path("/usr/share/pocketsphinx/test/data/cards/cards.gram")  # Debian's pocketsphinx-testdata
 

@@ -8,6 +8,7 @@ from typing import Callable, List, Tuple
 import pytest
 
 from fixtures.audio import speak_tones
+from fixtures.rig import AT_16K, Rig
 from fixtures.tones_model import tones_ctc_model_directory, tones_model_directory, tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE
@@ -16,7 +17,6 @@ from speech_event.ports import Recognizer
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.recognizers.whisper.recognizer import WhisperRecognizer
-from tests.helpers.rig import AT_16K, Rig
 
 CONFIG = dataclasses.replace(AT_16K, early_pause=0.5, complete_answers="")
 COMMANDS = "go to the kitchen|stop|yes|no"

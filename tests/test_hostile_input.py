@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from fixtures.audio import speak_tones
+from fixtures.rig import Rig
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray, MultiArrayDimension, String
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.rig import Rig
 
 CONFIG = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0, max_message_length=1.0)
 SPEECH = speak_tones("go left", 16000)

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 from fixtures.audio import speak_tones
+from fixtures.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
+from fixtures.rig import AT_16K, Rig
 from harness.memory_runner import run_in_memory
 from harness.scenario import Say, Scenario, Silence
 from speech_event import SIGNAL_TOPIC
@@ -17,8 +19,6 @@ from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.fakes import FailingRecognizer, GatedRecognizer, SpyRecognizer
-from tests.helpers.rig import AT_16K, Rig
 
 
 def test_speech_that_arrives_while_a_slow_recognition_runs_is_kept_and_published_in_order() -> None:

@@ -9,7 +9,9 @@ from hypothesis import settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, rule
 
+from fixtures.fakes import SpyRecognizer
 from fixtures.malformed import malformed_message
+from fixtures.strategies import audio
 from harness.scenario import MALFORMED_KINDS
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -20,8 +22,6 @@ from speech_event.messages import Float32MultiArray
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.assembly import search_samples
 from speech_event.pipeline.validate import Reason, Rejection, validate_signal
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.strategies import audio
 
 CONFIG = SpeechEventConfig(
     sample_rate=16000,  # the recognizer's rate: no resampling, so samples can be compared exactly

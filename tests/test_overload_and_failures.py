@@ -8,13 +8,13 @@ from typing import List
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer
+from fixtures.rig import Rig
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import String
 from speech_event.ports import Transcript
 from speech_event.topics import PARTIAL_TOPIC
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.rig import Rig
 
 HALF_SECOND = np.full(8000, 0.1, dtype=np.float32)
 UNRECOGNIZED = SpeechEventConfig(sample_rate=16000, health_check_period=3600.0, publish_unrecognized=True)

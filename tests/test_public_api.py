@@ -7,7 +7,7 @@ from typing import List
 
 import speech_event
 from fixtures.audio import speak_tones
-from tests.helpers.paths import ROOT
+from fixtures.paths import ROOT
 
 
 def test_the_package_docstrings_recipe_runs_the_node_with_public_names_only() -> None:

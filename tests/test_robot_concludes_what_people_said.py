@@ -2,8 +2,8 @@
 Behaviour Controller concludes from what the node publishes for people saying "yes", "no" and "go"
 (trained Whisper: tests/real/test_robot_concludes_what_people_said.py)."""
 
+from fixtures.people_answering import answers_heard
 from harness.behaviour_controller import NO, NOTHING, YES
-from tests.helpers.people_answering import answers_heard
 
 
 def test_the_robot_concludes_what_people_said_but_for_a_go_pocketsphinx_misheard() -> None:

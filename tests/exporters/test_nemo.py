@@ -4,12 +4,12 @@ from pathlib import Path
 
 import pytest
 
+from fixtures.application import run_application
 from fixtures.nemo_config import PREPROCESSOR
 from speech_event.errors import ModelError
 from speech_event.exporters.nemo import feature_settings, manifest_for, vocabulary_lines
 from speech_event.recognizers.nemo.features import FeatureSettings
 from speech_event.recognizers.nemo.manifest import Manifest
-from tests.helpers.application import run_application
 
 CONFORMER = {
     "preprocessor": PREPROCESSOR,

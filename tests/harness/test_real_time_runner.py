@@ -6,6 +6,7 @@ import time
 
 import pytest
 
+from fixtures.paths import ROOT
 from harness.memory_runner import SoundDetectionOnTheBus
 from harness.outcome import REAL_TIME
 from harness.real_time_runner import run_in_real_time
@@ -17,7 +18,6 @@ from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.services import RuntimeControl
 from speech_event.messages import Float32MultiArray, SetGrammarResponse
 from speech_event.pipeline.publication import Publication
-from tests.helpers.paths import ROOT
 
 # Two commands, two seconds apart, and a recognise_speech goal for the second.
 SCENARIO = {

@@ -12,13 +12,13 @@ import pytest
 import soundfile
 
 from fixtures.noises import noise_like, read_audio, rms, under
+from fixtures.paths import ROOT
 from fixtures.recordings import FSDD
 from harness.memory_runner import run_in_memory
 from harness.scenario import Scenario, ScenarioError, parse_scenario
 from harness.timeline import Publish, build_timeline
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
-from tests.helpers.paths import ROOT
 
 RATE = 48000
 

@@ -6,6 +6,9 @@ from typing import Any, Dict, List
 
 import pytest
 
+from fixtures.paths import ROOT
+from fixtures.processes import children
+from fixtures.scenario_files import SCENARIOS
 from harness.cli import COMMANDS, base_config, build_parser, demo_engine
 from harness.memory_runner import run_in_memory
 from harness.outcome import REAL_TIME, SIM_TIME, Published
@@ -13,9 +16,6 @@ from harness.report import passed, report
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.config import SpeechEventConfig
-from tests.helpers.paths import ROOT
-from tests.helpers.processes import children
-from tests.helpers.scenario_files import SCENARIOS
 
 
 def test_there_are_scenarios_for_every_behaviour_the_issue_names() -> None:

@@ -5,6 +5,8 @@ from typing import Any, Callable, List, Tuple
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer
+from fixtures.rig import AT_16K, Rig
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.adapters.memory_bus import MemoryGoal
 from speech_event.config import SpeechEventConfig
@@ -12,8 +14,6 @@ from speech_event.interfaces.action import ACTION_NAME, ListenAction
 from speech_event.interfaces.services import SET_ENABLED_SERVICE
 from speech_event.messages import RecogniseSpeechGoal, RecogniseSpeechResult, SetEnabledRequest
 from speech_event.ports import TIMER_TOLERANCE
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.rig import AT_16K, Rig
 
 BLOCK = np.full(4096, 0.1, dtype=np.float32)  # 0.256 s at 16 kHz
 

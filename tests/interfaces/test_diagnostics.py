@@ -5,12 +5,12 @@ import itertools
 import numpy as np
 
 from fixtures.audio import speak_tones
+from fixtures.fakes import SpyRecognizer
+from fixtures.rig import Rig
 from speech_event.config import SpeechEventConfig
 from speech_event.interfaces.services import SET_ENABLED_SERVICE
 from speech_event.messages import DiagnosticArray, DiagnosticStatus, Float32MultiArray, SetEnabledRequest
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.rig import Rig
 
 CONFIG = SpeechEventConfig(sample_rate=16000, health_check_period=2.0, min_utterance_length=0.3)
 

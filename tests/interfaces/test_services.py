@@ -9,14 +9,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from fixtures.fakes import GatedRecognizer, SpyRecognizer
+from fixtures.rig import AT_16K, Rig
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import SetEnabledRequest, SetLanguageRequest
 from speech_event.ports import Recognizer, Transcript
-from tests.helpers.fakes import GatedRecognizer, SpyRecognizer
-from tests.helpers.rig import AT_16K, Rig
 
 HALF_SECOND = np.full(8000, 0.1, dtype=np.float32)
 

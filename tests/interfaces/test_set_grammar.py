@@ -9,14 +9,14 @@ from typing import Dict
 import pytest
 
 from fixtures.audio import speak_tones
+from fixtures.fakes import SpyRecognizer
+from fixtures.rig import AT_16K, Rig
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ConfigError
 from speech_event.interfaces.services import SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import SetGrammarRequest, SetLanguageRequest
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.topics import SPEECH_NOT_RECOGNIZED
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.rig import AT_16K, Rig
 
 PAUSE = AT_16K.speech_pause_period + 0.1
 

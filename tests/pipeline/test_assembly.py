@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fixtures.strategies import audio, split, split_points
 from speech_event.pipeline.assembly import NonSpeech, UtteranceAssembler, quiet_cut, search_samples
-from tests.helpers.strategies import audio, split, split_points
 
 RATE = 1000  # a small rate keeps examples small; the logic is rate-independent
 MAX_SECONDS = 2.0

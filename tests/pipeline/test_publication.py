@@ -9,6 +9,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus, MemoryGoal
 from speech_event.config import SpeechEventConfig
@@ -21,7 +22,6 @@ from speech_event.pipeline.screen import Discard
 from speech_event.pipeline.storage import StoredUtterance, UtteranceStore, read_index
 from speech_event.ports import PublisherStatus, Transcript
 from speech_event.topics import SPEECH_NOT_RECOGNIZED, TEXT_TOPIC
-from tests.helpers.fakes import SpyRecognizer
 
 CONFIG = SpeechEventConfig(sample_rate=16000)
 UNRECOGNIZED = dataclasses.replace(CONFIG, publish_unrecognized=True)

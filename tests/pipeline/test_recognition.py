@@ -5,11 +5,11 @@ from typing import Iterator, List
 
 import numpy as np
 
+from fixtures.fakes import HEARD, FailingRecognizer, SpyRecognizer
 from speech_event.pipeline.recognition import Recognition
 from speech_event.pipeline.recognition_queue import RecognitionOutcome
 from speech_event.pipeline.screen import Discard, SpeechScreen
 from speech_event.ports import Transcript
-from tests.helpers.fakes import HEARD, FailingRecognizer, SpyRecognizer
 
 NO_SCREEN = SpeechScreen(0.0, 0.0, None)
 

@@ -14,7 +14,11 @@ from typing import Iterator, List
 import numpy as np
 import pytest
 
+from fixtures.application import run_application
 from fixtures.audio import speak_tones
+from fixtures.fakes import SpyRecognizer
+from fixtures.paths import ROOT
+from fixtures.rig import Rig
 from harness.cli import main as harness_main
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
@@ -22,10 +26,6 @@ from speech_event.pipeline.resample import resample
 from speech_event.pipeline.storage import INDEX_NAME, StoredUtterance, UtteranceStore, read_index, wav_bytes
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.application import run_application
-from tests.helpers.fakes import SpyRecognizer
-from tests.helpers.paths import ROOT
-from tests.helpers.rig import Rig
 
 
 def _stored_rig(folder: Path, recognizer: object = None, **settings: object) -> Rig:

@@ -7,11 +7,11 @@ from typing import List, Set
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer, StoppableRecognizer
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.pipeline.recognition_queue import RecognitionJob
 from speech_event.pipeline.watchdog import Watchdog
 from speech_event.ports import Recognizer
-from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 
 class Running:

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from fixtures import recordings
+from fixtures.load import cores_kept_busy
+from fixtures.paths import ROOT
 from fixtures.recordings import Recording
-from tests.helpers.load import cores_kept_busy
-from tests.helpers.paths import ROOT
 
 RATE = recordings.SAMPLE_RATE
 GAP_SECONDS = 2.5  # between two recordings: the pause (1.5 s) and the gate's hang-over and pre-roll

@@ -6,9 +6,9 @@ Only the conclusions are asserted, and how each text is written from the engine'
 Whisper writes for a clip ("No." or "Now.", both a no to the controller) is a near tie its CPU's
 kernels may decide."""
 
+from fixtures.people_answering import answers_heard
 from harness.behaviour_controller import NO, NOTHING, YES, conclusion
 from speech_event.spelling import robot_written
-from tests.helpers.people_answering import answers_heard
 
 
 def test_the_robot_concludes_yes_and_no_from_what_whisper_heard_people_say() -> None:

@@ -13,9 +13,9 @@ import sys
 from pathlib import Path
 from typing import List
 
-from tests.helpers.load import cores_kept_busy
-from tests.helpers.paths import ROOT
-from tests.helpers.scenario_files import ALL_SCENARIOS, shard
+from fixtures.load import cores_kept_busy
+from fixtures.paths import ROOT
+from fixtures.scenario_files import ALL_SCENARIOS, shard
 
 SIDE_BY_SIDE = 8  # about 500 s of scenarios: a minute or two of wall clock in eight parts
 

@@ -1,17 +1,17 @@
 """The scenarios on trained weights (Whisper tiny.en: free speech, speculation, partial results,
 set_grammar) pass in memory, and publish the same with speculation and partial results off
-(tests/helpers/every_scenario.py says exactly what is compared)."""
+(fixtures/every_scenario.py says exactly what is compared)."""
 
 from pathlib import Path
 
 import pytest
 
-from tests.helpers.every_scenario import (
+from fixtures.every_scenario import (
     RECOGNITION_SECONDS,
     check_scenario_ending_at_end_of_speech,
     check_scenario_with_and_without_speculation_and_partials,
 )
-from tests.helpers.scenario_files import TRAINED_SCENARIOS
+from fixtures.scenario_files import TRAINED_SCENARIOS
 
 
 def test_there_are_scenarios_on_trained_weights_for_free_speech_set_grammar_and_people() -> None:

@@ -17,6 +17,7 @@ import pytest
 from fixtures import recordings
 from fixtures.festival import festival_voice
 from fixtures.noises import at_level, read_audio, under
+from fixtures.paths import ROOT
 from fixtures.trained_whisper import tiny_en_directory
 from fixtures.tts import speak_tts
 from speech_event.grammar import load_grammar, phrases_grammar
@@ -31,7 +32,6 @@ from speech_event.recognizers.whisper.recognizer import (
     compression_ratio,
 )
 from speech_event.spelling import spelt
-from tests.helpers.paths import ROOT
 
 RECORDINGS = recordings.cards() + recordings.librivox()
 DIGITS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine")

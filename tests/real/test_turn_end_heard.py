@@ -8,11 +8,11 @@ from typing import Any, Dict, List, Tuple
 
 import pytest
 
+from fixtures.paths import ROOT
 from fixtures.recordings import LJSPEECH
 from harness.memory_runner import run_in_memory
 from harness.scenario import parse_scenario
 from speech_event.config import SpeechEventConfig
-from tests.helpers.paths import ROOT
 
 PAUSE = 1.5  # speech_pause_period
 

@@ -1,5 +1,5 @@
 """An engine in a process of its own (speech_event/recognizers/engine_process.py), on a stand-in
-engine that starts fast (tests/helpers/stub_engine.py): calls, exceptions, a child that dies, and
+engine that starts fast (fixtures/stub_engine.py): calls, exceptions, a child that dies, and
 no process left behind. pocketsphinx hosted so: test_sphinx_process.py."""
 
 import functools
@@ -16,11 +16,11 @@ from typing import Iterator, List
 
 import pytest
 
+from fixtures.paths import ROOT
+from fixtures.processes import children, running
+from fixtures.stub_engine import StubEngine
 from speech_event.errors import GrammarError, ModelError
 from speech_event.recognizers.engine_process import EngineProcess, EngineProcessError
-from tests.helpers.paths import ROOT
-from tests.helpers.processes import children, running
-from tests.helpers.stub_engine import StubEngine
 
 
 @pytest.fixture
@@ -153,7 +153,7 @@ def test_the_child_ends_when_its_parent_is_killed(tmp_path: Path) -> None:
         """
         import os, signal
         from speech_event.recognizers.engine_process import EngineProcess
-        from tests.helpers.stub_engine import StubEngine
+        from fixtures.stub_engine import StubEngine
         process = EngineProcess("stub", StubEngine)
         print(process.pid, flush=True)
         os.kill(os.getpid(), signal.SIGKILL)  # no finalizer runs: only the pipe's end tells the child
@@ -170,7 +170,7 @@ def test_a_script_without_a_main_guard_hosts_an_engine(tmp_path: Path) -> None:
         tmp_path,
         """
         from speech_event.recognizers.engine_process import EngineProcess
-        from tests.helpers.stub_engine import StubEngine
+        from fixtures.stub_engine import StubEngine
         print(EngineProcess("stub", StubEngine).call("echo", "hosted"))
         """,
     )

@@ -6,6 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fixtures.application import run_application
+from fixtures.paths import ROOT
 from fixtures.transducer_model import build_random_transducer
 from fixtures.tts import speak_tts
 from speech_event.config import SpeechEventConfig
@@ -16,8 +18,6 @@ from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.nemo.recognizer import NemoRecognizer
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.sphinx_process import SphinxProcess
-from tests.helpers.application import run_application
-from tests.helpers.paths import ROOT
 
 COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
 

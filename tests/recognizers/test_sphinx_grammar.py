@@ -8,12 +8,12 @@ import pytest
 
 from fixtures import recordings
 from fixtures.festival import festival_voice
+from fixtures.paths import ROOT
 from fixtures.tts import speak_tts
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import Grammar, jsgf_grammar, load_grammar, phrases_grammar, requested_grammar
 from speech_event.ports import Grammars, Transcript
 from speech_event.recognizers.sphinx import DEFAULT_GRAMMAR_THRESHOLD, SphinxRecognizer
-from tests.helpers.paths import ROOT
 
 COMMANDS = ROOT / "harness" / "data" / "robot_commands.txt"
 

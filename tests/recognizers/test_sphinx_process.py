@@ -12,6 +12,7 @@ import pytest
 
 from bench.figures.measures import longest_stall
 from fixtures import recordings
+from fixtures.processes import children, running
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import GrammarError, ModelError
 from speech_event.grammar import load_grammar, phrases_grammar
@@ -20,7 +21,6 @@ from speech_event.recognizers import RECOGNIZERS
 from speech_event.recognizers.engine_process import EngineProcessError
 from speech_event.recognizers.sphinx import SphinxRecognizer
 from speech_event.recognizers.sphinx_process import SphinxProcess
-from tests.helpers.processes import children, running
 
 CARDS = load_grammar(recordings.CARDS_GRAMMAR)
 Engine = Union[SphinxRecognizer, SphinxProcess]

@@ -5,6 +5,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, normalise_text, speak_tones
+from fixtures.strategies import TONES_TEXT, split, split_points
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
@@ -14,7 +15,6 @@ from speech_event.messages import Float32MultiArray, String
 from speech_event.node import SpeechEventNode
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.tones import ToneRecognizer, decode_tones
-from tests.helpers.strategies import TONES_TEXT, split, split_points
 
 
 @settings(max_examples=60, deadline=None)

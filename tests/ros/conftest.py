@@ -12,10 +12,10 @@ import pytest
 import rosgraph
 import rospy
 
+from fixtures.paths import ROOT
 from harness.processes import Processes, free_port
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.ros import master_answers
-from tests.helpers.paths import ROOT
 
 
 def ros_environment(master_port: int, tmp_path: Path) -> Dict[str, str]:

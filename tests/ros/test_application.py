@@ -15,15 +15,15 @@ import rosgraph
 import rospy
 from std_msgs import msg as std_msgs
 
+from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
+from fixtures.paths import ROOT
 from fixtures.tones_model import tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from harness.processes import Processes, free_port
 from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
-from tests.helpers.application import APPLICATION
-from tests.helpers.paths import ROOT
 from tests.ros.conftest import ros_environment, spoken, wait_for
 
 

@@ -7,10 +7,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+from fixtures.debian_packages import not_installed_by_the_project
+from fixtures.paths import ROOT
 from speech_event.msg import RecogniseSpeechAction
 from speech_event.srv import SetEnabled, SetLanguage
-from tests.helpers.debian_packages import not_installed_by_the_project
-from tests.helpers.paths import ROOT
 
 
 def _configuration_files(cache: Path) -> "list[str]":

@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 from typing import List
 
+from fixtures.debian_packages import LISTS, listed, named_packages, not_installed_by_the_project
+from fixtures.paths import ROOT
 from speech_event.adapters import ros_interfaces
-from tests.helpers.debian_packages import LISTS, listed, named_packages, not_installed_by_the_project
-from tests.helpers.paths import ROOT
 
 # What the suite runs: roscore and roslaunch, catkin, the rosservice/rostopic commands, the X
 # server and screenshot tools of the window test, ip for the network namespaces.
@@ -34,7 +34,7 @@ IMPORTED = (
     "harness.driver_node",
     "harness.ros.driver_side",
     "tests.ros.conftest",
-    "tests.helpers.two_hosts",
+    "fixtures.two_hosts",
 )
 
 

@@ -15,6 +15,7 @@ from typing import Dict, List
 import numpy as np
 import pytest
 
+from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
 from harness.cli import open_demo_window
 from harness.processes import Processes
@@ -47,7 +48,6 @@ from speech_event.messages import (
 )
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.helpers.application import APPLICATION
 from tests.ros.conftest import wait_for
 
 NOON = 12 * 3600.0

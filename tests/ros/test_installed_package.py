@@ -13,10 +13,10 @@ from typing import Dict, Iterator, List
 import pytest
 import rospy
 
+from fixtures.paths import ROOT
+from fixtures.wheel import build_wheel, install
 from harness.processes import Processes
 from speech_event.srv import SetLanguage
-from tests.helpers.paths import ROOT
-from tests.helpers.wheel import build_wheel, install
 from tests.ros.conftest import serves, wait_for
 
 

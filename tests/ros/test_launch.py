@@ -13,10 +13,10 @@ import rosgraph
 import soundfile
 
 from fixtures.audio import speak_tones
+from fixtures.paths import ROOT
+from fixtures.text_listener import received, write_listener
 from harness.processes import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from tests.helpers.paths import ROOT
-from tests.helpers.text_listener import received, write_listener
 from tests.ros.conftest import ros_environment, serves, spoken, wait_for
 
 LAUNCH = ROOT / "launch"

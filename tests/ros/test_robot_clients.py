@@ -20,12 +20,12 @@ from actionlib_msgs.msg import GoalStatus
 from diagnostic_msgs.msg import DiagnosticArray
 from std_msgs import msg as std_msgs
 
+from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
 from harness.processes import Processes
 from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
-from tests.helpers.application import APPLICATION
 from tests.ros.conftest import serves, wait_for
 
 ROBOT_PACKAGE = "cssr_system"

@@ -11,11 +11,11 @@ from typing import Dict, List
 import numpy as np
 import rosgraph
 
+from fixtures.paths import ROOT
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosClock, RosTransport, _to_ros, transcript_from_ros
 from speech_event.messages import Float32MultiArray, String, TranscriptMessage
 from speech_event.ports import PublisherStatus
-from tests.helpers.paths import ROOT
 from tests.ros.conftest import wait_for
 
 STAND_IN = [

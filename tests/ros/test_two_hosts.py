@@ -1,6 +1,6 @@
 """Speech Event on one host, roscore, the harness and soundDetection on another (issue 12).
 
-The hosts are two network namespaces joined by a veth pair (tests/helpers/two_hosts.py). The test
+The hosts are two network namespaces joined by a veth pair (fixtures/two_hosts.py). The test
 process itself stays in the machine's own namespace and never addresses the pair: everything that
 talks to the master runs on one of the two hosts.
 """
@@ -14,14 +14,14 @@ from typing import Any, Dict, Iterator, List, Optional
 
 import pytest
 
+from fixtures.application import APPLICATION
+from fixtures.paths import ROOT
+from fixtures.scenario_files import shard
+from fixtures.text_listener import assert_errors_on_time, received, write_listener
+from fixtures.two_hosts import Host, TwoHosts, two_hosts
 from harness.processes import Processes
 from harness.scenario import load_scenario
 from speech_event.config import SpeechEventConfig
-from tests.helpers.application import APPLICATION
-from tests.helpers.paths import ROOT
-from tests.helpers.scenario_files import shard
-from tests.helpers.text_listener import assert_errors_on_time, received, write_listener
-from tests.helpers.two_hosts import Host, TwoHosts, two_hosts
 from tests.ros.conftest import ros_environment, wait_for
 
 MASTER_PORT = 11311  # the namespaces are the test's own: the standard port is free there

@@ -12,6 +12,7 @@ from typing import Callable, List, Optional, Tuple
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar
@@ -23,7 +24,6 @@ from speech_event.ports import Audio, Recognizer, Transcript
 from speech_event.turns.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.turns.partials import PartialCounts
 from speech_event.turns.speculation import SpeculationCounts
-from tests.helpers.fakes import SpyRecognizer
 
 CONFIG = SpeechEventConfig(
     sample_rate=16000,

@@ -13,6 +13,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
+from fixtures.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
+from fixtures.paths import ROOT
+from fixtures.rig import AT_16K, Rig
+from fixtures.scenario_files import SCENARIOS
 from harness.memory_runner import run_in_memory
 from harness.scenario import load_scenario
 from speech_event.config import GRAMMAR_END_OF_SPEECH, SpeechEventConfig, end_of_speech_seconds
@@ -23,10 +27,6 @@ from speech_event.messages import SetEnabledRequest, SetGrammarRequest
 from speech_event.ports import Recognizer, Stoppable, Transcript
 from speech_event.recognizers.tones import WORD_GAP_SECONDS, ToneRecognizer
 from speech_event.turns.speech_end import AVERAGED_FRAMES
-from tests.helpers.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
-from tests.helpers.paths import ROOT
-from tests.helpers.rig import AT_16K, Rig
-from tests.helpers.scenario_files import SCENARIOS
 
 RATE = 16000
 BLOCK = 1024  # 64 ms

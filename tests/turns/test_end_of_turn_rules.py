@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 
 from fixtures.audio import speak_tones
+from fixtures.rig import AT_16K
 from speech_event.turns.end_of_turn import EndOfTurn
-from tests.helpers.rig import AT_16K
 
 RATE = 16000
 CONFIG = dataclasses.replace(AT_16K, end_of_speech=0.3)

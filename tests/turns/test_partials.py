@@ -13,6 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
+from fixtures.rig import Rig
 from speech_event import SOUND_DETECTION_DOWN
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError
@@ -21,7 +22,6 @@ from speech_event.messages import NO_CONFIDENCE, NO_UTTERANCE, Float32MultiArray
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.topics import PARTIAL_TOPIC, TRANSCRIPT_TOPIC
-from tests.helpers.rig import Rig
 
 RATE = 16000
 BLOCK = 4096 / RATE  # Rig.speak: one block every 0.256 s, the first at 0.256 s

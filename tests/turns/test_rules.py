@@ -6,6 +6,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
+from fixtures.fakes import SpyRecognizer
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.config import SpeechEventConfig
@@ -19,7 +20,6 @@ from speech_event.pipeline.watchdog import Watchdog
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Recognizer, Transcript
 from speech_event.turns.rules import InForce, TurnRules
-from tests.helpers.fakes import SpyRecognizer
 
 CONFIG = SpeechEventConfig(sample_rate=16000, speculative_recognition=False, partial_period=0.0)
 BLOCK = np.full(4096, 0.1, dtype=np.float32)  # 0.256 s

@@ -14,13 +14,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import speak_tones
+from fixtures.rig import Rig
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.config import SpeechEventConfig
 from speech_event.messages import Float32MultiArray
 from speech_event.ports import Transcript
 from speech_event.recognizers.tones import ToneRecognizer
 from speech_event.turns.speculation import complete_answers, is_complete
-from tests.helpers.rig import Rig
 
 RATE = 16000
 PLAIN = SpeechEventConfig(sample_rate=RATE, health_check_period=3600.0, speculative_recognition=False)

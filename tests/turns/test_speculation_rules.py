@@ -6,6 +6,7 @@ from typing import List, NamedTuple, Optional, Tuple
 import numpy as np
 import pytest
 
+from fixtures.fakes import SpyRecognizer, StoppableRecognizer
 from speech_event.config import SpeechEventConfig
 from speech_event.grammar import Grammar, requested_grammar
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
@@ -18,7 +19,6 @@ from speech_event.turns.speculation import (
     decides_at_end_of_speech,
     is_complete,
 )
-from tests.helpers.fakes import SpyRecognizer, StoppableRecognizer
 
 CONFIG = SpeechEventConfig(speculative_recognition=True, complete_answers="yes,no")
 NO_ANSWERS = dataclasses.replace(CONFIG, complete_answers="")

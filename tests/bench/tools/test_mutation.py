@@ -6,7 +6,7 @@ import subprocess
 from pathlib import Path
 
 from bench.tools.mutation_report import report
-from tests.helpers.paths import ROOT
+from fixtures.paths import ROOT
 
 # mutmut 3 as the script calls it: run, then results with --all true (every mutant) and without
 # (the survivors); its mutants of methods are named with 'ǁ', as mutmut names them.

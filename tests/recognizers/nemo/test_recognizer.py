@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
+from fixtures.cancelling import failures_of_a_cancelled_transcription
 from fixtures.transducer_model import build_random_transducer
 from speech_event.errors import ModelError
 from speech_event.pipeline.resample import resample
@@ -23,7 +24,6 @@ from speech_event.recognizers.nemo.rnnt import rnnt_greedy
 from speech_event.recognizers.nemo.vocabulary import Vocabulary, load_vocabulary
 from speech_event.recognizers.onnx.directory import Runtime
 from speech_event.recognizers.onnx.session import providers
-from tests.helpers.cancelling import failures_of_a_cancelled_transcription
 
 
 def _kaldi_native_fbank(audio: np.ndarray) -> np.ndarray:

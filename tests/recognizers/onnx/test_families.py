@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from tests.helpers.paths import ROOT
+from fixtures.paths import ROOT
 
 
 def test_importing_the_registry_alone_registers_every_family(tmp_path: Path) -> None:

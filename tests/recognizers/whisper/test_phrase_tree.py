@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from fixtures.audio import speak_tones
+from fixtures.recorded_decoding import RecordedDecoding
 from fixtures.whisper_tones_model import MANIFEST, whisper_tones_model_directory
 from speech_event.recognizers.whisper.features import whisper_log_mel
 from speech_event.recognizers.whisper.forced import score_phrases
@@ -15,7 +16,6 @@ from speech_event.recognizers.whisper.manifest import load_tokens
 from speech_event.recognizers.whisper.model import DecoderSession, WhisperModel
 from speech_event.recognizers.whisper.phrase_tree import score_phrases_that_decide
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer
-from tests.helpers.recorded_decoding import RecordedDecoding
 
 PROMPT = MANIFEST.prompt("english")
 TEXTS = [

@@ -10,7 +10,10 @@ from typing import Dict, List, Sequence
 import numpy as np
 import pytest
 
+from fixtures.application import run_application
 from fixtures.audio import noise, speak_tones
+from fixtures.cancelling import failures_of_a_cancelled_transcription
+from fixtures.recorded_decoding import RecordedDecoding
 from fixtures.whisper_tones_model import MANIFEST as TONES_MANIFEST
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
@@ -28,9 +31,6 @@ from speech_event.recognizers.whisper.recognizer import (
     compression_ratio,
     pieces_at_quiet_points,
 )
-from tests.helpers.application import run_application
-from tests.helpers.cancelling import failures_of_a_cancelled_transcription
-from tests.helpers.recorded_decoding import RecordedDecoding
 
 RATE = 16000
 # A small vocabulary: 0-4 text, 5 eot, 6 sot, 7 en, 8 transcribe, 9 no_speech, 10 no timestamps,

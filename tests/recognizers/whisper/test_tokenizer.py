@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from tokenizers import Tokenizer
 
+from fixtures.paths import ROOT
 from fixtures.trained_whisper import tiny_en_directory
 from fixtures.whisper_tones_model import MANIFEST, TIMESTAMP_BEGIN, whisper_tones_model_directory
 from speech_event.errors import ModelError
@@ -17,7 +18,6 @@ from speech_event.exporters.faster_whisper import read_vocabulary, token_pieces
 from speech_event.recognizers.whisper.manifest import load_tokens, text_of
 from speech_event.recognizers.whisper.tokenizer import WhisperTokenizer, word_pattern
 from speech_event.recognizers.whisper.written_forms import phrase_variants
-from tests.helpers.paths import ROOT
 
 
 @dataclass(frozen=True)
