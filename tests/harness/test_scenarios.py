@@ -241,7 +241,8 @@ def test_a_scenario_whose_package_is_not_installed_says_what_to_install_and_the_
 
 def test_the_demo_turns_real_speech_into_text_on_embedded_defaults() -> None:
     """Whisper tiny.en int8 (the test extra's wheel) within the robot's commands: the engine that
-    published no other word as a command on recordings of people (docs/grammar.md#people)."""
+    published one other word as a command on recordings of people, pocketsphinx 14 of 30 digits
+    (docs/grammar.md#people)."""
     result = _harness("demo", "go to the kitchen")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
