@@ -1,6 +1,6 @@
 """For catkin only (catkin_python_setup needs a setup.py); pip reads pyproject.toml."""
 
-from setuptools import setup
+from setuptools import find_packages, setup
 
 try:
     from catkin_pkg.python_setup import generate_distutils_setup
@@ -9,20 +9,12 @@ except ImportError:  # pip, outside a catkin workspace
 else:
     setup(
         **generate_distutils_setup(
-            packages=[
-                "speech_event",
-                "speech_event.adapters",
-                "speech_event.exporters",
-                "speech_event.interfaces",
-                "speech_event.pipeline",
-                "speech_event.recognizers",
-                "speech_event.recognizers.nemo",
-                "speech_event.recognizers.onnx",
-                "speech_event.recognizers.whisper",
-                "harness",
-                "harness.ros",
-                "fixtures",
-            ],
+            # The packages pip installs (pyproject.toml's include), found rather than listed, so a
+            # new one cannot be left out; msg/ and srv/ are catkin's own, built into its devel space.
+            packages=find_packages(
+                include=["speech_event*", "harness*", "fixtures*"],
+                exclude=["speech_event.msg*", "speech_event.srv*"],
+            ),
             package_data={
                 "harness": ["data/*.txt"],
                 "speech_event": [

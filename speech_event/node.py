@@ -1,16 +1,18 @@
-"""The Speech Event node: message in -> validate -> assemble -> resample -> screen -> recognize
-(off the callback) -> publish.
+"""The Speech Event node: message in -> validate -> turn rules (assemble, end of turn) -> queue ->
+resample -> screen -> recognize (off the callback) -> publish.
 
 Everything it touches comes through its constructor: the transport, the clock, the recognizer and
-the executor that runs recognition off the subscriber callback. It reads no clock but the one it is
-given (the stopwatch only times recognitions for diagnostics) and keeps no module state, so the
-same object runs on the in-memory bus, on a real roscore, and on the robot.
+the executor that runs recognition off the subscriber callback. Its rules read no clock but the one
+it is given (the stopwatch only times recognitions for diagnostics, and the store rate-limits its
+warnings on the monotonic clock) and it keeps no module state, so the same object runs on the
+in-memory bus, on a real roscore, and on the robot.
 
 This module is the wiring. The steps live in ``speech_event.pipeline``, the robot's interfaces
 around them (services, action, diagnostics, the periodic health checks) in
 ``speech_event.interfaces``, and the rules on the utterance being collected (when it ends, what
 the worker does for it meanwhile) in ``speech_event.turns``, whose ``TurnRules`` takes each block
-the node accepts. They are called under the node's lock.
+the node accepts. The turn rules, the services and the health checks are called under the node's
+lock; recognition and publication run on the worker without it.
 """
 
 import logging
@@ -91,16 +93,17 @@ class SpeechEventNode:
         self._publication = Publication(config, self._statistics, self._action, self._store, clock.now)
         self._control = RuntimeControl(
             LanguageEngines(config.language, recognizer, build_engine),
-            self._engine_and_grammar,
-            self.set_enabled,
-            self._use_engine,
-            self._use_grammar,
+            current=self._engine_and_grammar,
+            set_enabled=self.set_enabled,
+            use_engine=self._use_engine,
+            use_grammar=self._use_grammar,
         )
         # The subscriber callback, the clock's timers, the service handlers and the recognition
         # worker may each run on their own thread (rospy); this lock guards the rules' state (the
         # utterance being collected) and what is in force.
         self._lock = threading.Lock()
         self._in_force = InForce(config.language, recognizer, starting_grammar(config, recognizer))
+        # A lambda: the turn rules, which know what runs on the worker, are made below.
         self._watchdog = Watchdog(
             clock, self._lock, config.recognition_timeout, lambda job: self._turns.still_running(job)
         )
@@ -121,14 +124,9 @@ class SpeechEventNode:
         )
         self.speculations: SpeculationCounts = self._turns.speculations  # how speculation fared
         self.partials: PartialCounts = self._turns.partials  # how partial results fared
+        discards = [reason.value for reason in Discard]
         self._health = Health(
-            config,
-            transport,
-            clock,
-            self._statistics,
-            self._state,
-            self._sound_detection_down,
-            [reason.value for reason in Discard],
+            config, transport, clock, self._statistics, self._state, self._sound_detection_down, discards
         )
         self._started_at = 0.0
 
@@ -202,7 +200,7 @@ class SpeechEventNode:
         if self._store is not None:
             self._store.flush()
 
-    # -- message in -> validate -> assemble ---------------------------------------------------------
+    # -- message in -> validate -> turn rules -------------------------------------------------------
 
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition, never raises."""
@@ -243,6 +241,7 @@ class SpeechEventNode:
             self._action.disabled()
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
+        """set_language: ``recognizer`` transcribes ``language`` from the next utterance on."""
         with self._lock:  # utterances closed before this finish with the old engine
             self._turns.end_turn_if_over()
             self._turns.engine_or_grammar_changes()
@@ -250,6 +249,7 @@ class SpeechEventNode:
         _LOG.info("speechEvent transcribes %s now", language)
 
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
+        """set_grammar: ``grammar`` (None: free speech) is in force from the next utterance on."""
         with self._lock:  # utterances closed before this finish with the old grammar
             self._turns.end_turn_if_over()
             self._turns.engine_or_grammar_changes()

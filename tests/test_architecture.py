@@ -12,7 +12,7 @@ from typing import Dict, Iterator, List, Set
 
 from fixtures.paths import ROOT
 
-PACKAGES = ("speech_event", "harness", "bench")
+PACKAGES = ("speech_event", "harness", "fixtures", "bench")
 SHARED_ONNX = "speech_event.recognizers.onnx"
 RECOGNIZERS = "speech_event.recognizers"
 # The ROS 1 client libraries and message packages, and where they may be imported: the adapters
@@ -29,7 +29,13 @@ ROS = (
     "rospkg",
     "std_msgs",
 )
-ROS_ROOMS = ("speech_event.adapters.ros", "harness.ros", "bench.figures.ros")
+ROS_ROOMS = (
+    "speech_event.adapters.ros",
+    "harness.ros",
+    "fixtures.ros",
+    "fixtures.text_listener",
+    "bench.figures.ros",
+)
 # The node library's layers, lowest first: a module imports from its own layer or those below it.
 # The base (the ports, the configuration, messages and grammars) knows no engine; the engines know
 # no node; the robot's interfaces know no pipeline; the pipeline, message in to text out, knows no

@@ -8,14 +8,13 @@ from typing import Optional
 import numpy as np
 
 from fixtures.audio import speak_tones
-from fixtures.fakes import SpyRecognizer
+from fixtures.fakes import Engines, SpyRecognizer
 from fixtures.rig import AT_16K, Rig
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_GRAMMAR_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import Float32MultiArray, SetEnabledRequest, SetGrammarRequest, SetLanguageRequest
 from speech_event.ports import Recognizer
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.interfaces.test_services import Engines
 
 BLOCK = np.full(4096, 0.1, dtype=np.float32)
 

@@ -2,17 +2,12 @@
 robot's grammar file), word errors against a reference, this process's memory, and how long an
 engine keeps the other threads from running."""
 
-import threading
-import time
 from pathlib import Path
 from typing import List, Tuple
-
-import numpy as np
 
 from fixtures.recordings import word_errors as recorded_word_errors
 from harness.cli import COMMANDS
 from speech_event.grammar import load_grammar
-from speech_event.ports import Recognizer
 
 
 def robot_commands() -> List[str]:
@@ -42,28 +37,3 @@ def _status_mib(field: str) -> float:
         if line.startswith(f"{field}:"):
             return int(line.split()[1]) / 1024
     raise RuntimeError(f"no {field} in /proc/self/status")
-
-
-def longest_stall(engine: Recognizer, audio: np.ndarray) -> float:
-    """The longest a thread waking every 5 ms waited for its turn while ``engine`` transcribed
-    ``audio``: how long the engine kept the node's other threads (timers, callbacks) from running."""
-    ticks: List[float] = []
-    done = threading.Event()
-
-    def tick() -> None:
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.005)
-
-    ticker = threading.Thread(target=tick)
-    ticker.start()
-    time.sleep(0.05)
-    began = time.perf_counter()
-    engine.transcribe(audio)
-    ended = time.perf_counter()
-    time.sleep(0.05)
-    done.set()
-    ticker.join()
-    return max(
-        later - earlier for earlier, later in zip(ticks, ticks[1:]) if later > began and earlier < ended
-    )

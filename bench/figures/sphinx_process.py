@@ -20,8 +20,8 @@ from typing import Callable, Dict, List, Union
 
 import numpy as np
 
-from bench.figures.measures import longest_stall
 from fixtures import recordings
+from fixtures.load import longest_stall
 from speech_event.grammar import load_grammar
 from speech_event.ports import Audio, Transcript
 from speech_event.recognizers.engine_process import EngineProcess

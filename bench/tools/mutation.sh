@@ -1,7 +1,7 @@
 #!/bin/bash
-# Mutation score of the core steps (validate, assembly, transcript, periodic): mutmut 3 on a scratch
-# copy of this checkout, running only those steps' tests. Prints killed/total per module and overall,
-# then the survivors. Needs mutmut>=3 beside pytest (python -m pip install mutmut); takes minutes.
+# Mutation score of the core steps (validate, assembly, transcript; interfaces/periodic): mutmut 3
+# on a scratch copy of this checkout, running only those steps' tests. Prints killed/total per module
+# and overall, then the survivors. Needs mutmut>=3 beside pytest (python -m pip install mutmut); takes minutes.
 #   bash bench/tools/mutation.sh [PYTHON]     (default: python3; the test environment's interpreter)
 set -euo pipefail
 python=${1:-python3}

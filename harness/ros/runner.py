@@ -99,7 +99,7 @@ class RosOptions:
     base_config: Optional[str] = None
     # Where the node's configuration file is written (a folder a node on another host can read).
     config_dir: Optional[str] = None
-    # The most seconds to wait for a text the node published by then in memory (schedule.py).
+    # The most seconds to wait for a text the node published by then in memory (harness/schedule.py).
     text_deadline: float = TEXT_DEADLINE
 
 
@@ -214,7 +214,8 @@ class RosReplay:
         # of a later time (soundDetection's crash) would say what it found then, so the clock
         # moves on only once the check has published its /diagnostics. The node's other rules
         # hold however late their timers run (a block that comes after the pause ends the
-        # utterance before it, turn_taking.py), and what they publish is waited for by settle.
+        # utterance before it, speech_event/turns/turn_taking.py), and what they publish is waited
+        # for by settle.
         if received is None or (self._checks is None and when in self._timers_fired):
             time.sleep(TIMER_SETTLE)  # nothing of the node's to wait for: its start, or another node
         elif self._checks is not None and self._checks.at(when):

@@ -1,9 +1,9 @@
 """Step 2 of the pipeline: assemble accepted samples into utterances.
 
-The assembler knows nothing of time: the node calls ``close`` when no block arrived for the pause
-period. It closes an utterance by itself when it reaches the length limit, cutting it where no
-word is cut in half; the rest starts the next utterance. Where it cuts depends only on the
-samples, never on how they were split into blocks.
+The assembler knows nothing of time: the turn rules (speech_event/turns/rules.py) call ``close``
+when no block arrived for the pause period. It closes an utterance by itself when it reaches the
+length limit, cutting it where no word is cut in half; the rest starts the next utterance. Where it
+cuts depends only on the samples, never on how they were split into blocks.
 
 Where to cut: in the last 30 % before the limit (3 s at most), the longest quiet run wins (a
 pause between words lasts longer than the dips inside a word), the latest of equally long runs,

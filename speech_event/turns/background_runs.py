@@ -19,7 +19,7 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 - when a run ends, or the worker finishes a closed utterance, the next run may start.
 
 A speculation that ends with the utterance still being collected may end the turn early
-(``early_pause``; or ``end_of_speech``: the node asked for a decision on a cut, and the speculation
+(``early_pause``; or ``end_of_speech``: the turn rules asked for a decision on a cut, and the speculation
 starts at once, on the samples up to it), and its text is a partial too when it is new. Every
 method is called under the node's lock; the jobs run on the worker and take the lock.
 """

@@ -84,20 +84,32 @@ class TurnRules:
                 in_force.recognizer, in_force.grammar, chosen, turn_heard is not None
             )
 
-        self._end = EndOfTurn(config, deciding, lambda: not isinstance(in_force.recognizer, Stoppable))
-        self._turn = TurnTaking(
+        self._end_of_speech = EndOfTurn(
+            config, decides=deciding, decides_once=lambda: not isinstance(in_force.recognizer, Stoppable)
+        )
+        self._pauses = TurnTaking(
             config,
             clock,
             lock,
-            self._close_utterance,
-            self._gap_passed,
-            self._silence_passed,
-            self._speculated,
-            deciding,
+            on_pause_end=self._pause_passed,
+            on_gap=self._gap_passed,
+            on_silence=self._silence_passed,
+            on_speculated=self._speculated,
+            deciding=deciding,
         )
+        # Step 3 of the pipeline, here since what the worker does for the utterance being collected
+        # waits for it; each closed utterance it finishes lets the background runs go on (a lambda:
+        # they are made next).
         self._closed = ClosedUtterances(queue, lock, worker, lambda: self._background.worker_free())
         self._background = BackgroundRuns(
-            config, clock, lock, worker, self._turn, self._so_far, self._closed.idle, turn_heard
+            config,
+            clock,
+            lock,
+            worker,
+            turn=self._pauses,
+            so_far=self._so_far,
+            worker_idle=self._closed.idle,
+            turn_heard=turn_heard,
         )
         self.speculations: SpeculationCounts = self._background.speculations
         self.partials: PartialCounts = self._background.partials
@@ -117,9 +129,9 @@ class TurnRules:
         """A block that arrived at ``arrival``, taken now or held for a decision."""
         # First: a speculation on the utterance it ends still counts, and a decision on the end of
         # speech that the gap before it asks for is made before it is taken.
-        self._turn.end_pause_if_over(arrival)
-        if self._end.deciding is not None:
-            self._end.hold(samples, arrival)
+        self._pauses.end_pause_if_over(arrival)
+        if self._end_of_speech.deciding is not None:
+            self._end_of_speech.hold(samples, arrival)
             return
         if self._assembler.pending_samples == 0:
             self._collecting_since = arrival
@@ -132,16 +144,16 @@ class TurnRules:
             self._submit(utterance, more_follows, arrival)
         if completed:
             self._background.utterance_cut(arrival)
-            self._end.cut_at_length(self._assembler.peek())
+            self._end_of_speech.cut_at_length(self._assembler.peek())
         else:
-            self._end.heard(samples)
-        self._background.more_audio(self._end.speculation_cut())
-        self._turn.heard(arrival)
+            self._end_of_speech.heard(samples)
+        self._background.more_audio(self._end_of_speech.speculation_cut())
+        self._pauses.heard(arrival)
         self._background.heard()
-        cut = self._end.heard_end()
+        cut = self._end_of_speech.heard_end()
         if cut is not None:
             self._decide(cut)
-        elif self._end.speculation_cut() is not None:
+        elif self._end_of_speech.speculation_cut() is not None:
             self._background.speculate()  # the speech may have ended: its text is ready sooner
 
     def end_turn_if_over(self) -> None:
@@ -151,22 +163,23 @@ class TurnRules:
         leaves pending past the pause: the decision is dropped and the whole utterance
         transcribed, so how long the engine takes never decides what a call applies to."""
         now = self._clock.now()
-        self._turn.end_pause_if_over(now)
-        if self._end.close_waits:
+        self._pauses.end_pause_if_over(now)
+        if self._end_of_speech.close_waits:
             self._background.drop()
             self._undecided()
-            self._turn.end_pause_if_over(now)
+            self._pauses.end_pause_if_over(now)
 
     def engine_or_grammar_changes(self) -> None:
-        """After end_turn_if_over: the runs on the utterance so far would be the old one's."""
+        """After end_turn_if_over: the background runs on the utterance so far used the old engine
+        or grammar; they are dropped, with any decision waiting on one."""
         self._background.drop()
         self._undecided()
 
     def drop_utterance(self) -> None:
         """The node is disabled: the utterance being collected is the robot's own voice."""
         self._background.drop_utterance()
-        self._turn.drop_turn()
-        self._end.dropped()
+        self._pauses.drop_turn()
+        self._end_of_speech.dropped()
         if self._assembler.close() is not None:
             self._statistics.discarded(DISCARDED_WHILE_DISABLED)
             self._action.utterance_dropped()
@@ -174,9 +187,9 @@ class TurnRules:
 
     def stop(self) -> None:
         """The node stops: the timers are unset; the utterance being collected is not transcribed."""
-        self._turn.stop()
+        self._pauses.stop()
         self._background.stop()
-        self._end.dropped()
+        self._end_of_speech.dropped()
 
     # -- the timers and the worker --------------------------------------------------------------------
 
@@ -186,7 +199,7 @@ class TurnRules:
 
     def _silence_passed(self) -> None:
         """No block came for end_of_speech: the end of speech (the robot's gate)."""
-        self._decide(self._end.gap_end())
+        self._decide(self._end_of_speech.gap_end())
         self._background.speculate()
 
     def _decide(self, cut: Optional[int]) -> None:
@@ -194,7 +207,7 @@ class TurnRules:
         in force decide) decides whether the turn ends there."""
         if cut is None or not self._in_force.enabled:
             return
-        self._end.decide(cut)
+        self._end_of_speech.decide(cut)
         complete = self._background.completed_on(cut)
         if complete is not None:  # the speculation on that audio has finished already
             self._decided(complete)
@@ -204,53 +217,53 @@ class TurnRules:
     def _speculated(self, samples: int, complete: bool) -> None:
         """A speculation on the utterance being collected ended; if it is the pending decision,
         the turn ends at its cut when its text is complete."""
-        if self._end.deciding == samples:
+        if self._end_of_speech.deciding == samples:
             self._decided(complete)
 
     def _decided(self, complete: bool) -> None:
         """The pending decision is made; then the blocks held meanwhile are taken."""
-        cut, close_waits = self._end.deciding, self._end.close_waits
-        held = self._end.decided()
+        cut, close_waits = self._end_of_speech.deciding, self._end_of_speech.close_waits
+        held = self._end_of_speech.decided()
         if complete and cut is not None:
             audio = self._assembler.close()
             self._background.utterance_closed()
-            self._turn.drop_turn()
+            self._pauses.drop_turn()
             if audio is not None:
-                self._submit(audio[:cut], False, self._turn.last_arrival)
-            self._end.closed(at_cut=True)
+                self._submit(audio[:cut], False, self._pauses.last_arrival)
+            self._end_of_speech.closed(at_cut=True)
             if audio is not None and audio.size > cut:
                 # What follows the cut begins the next utterance: mostly the room after the
                 # speech, which is dropped unless speech follows, but a quiet word after a pause
                 # ("go somewhere ... and do something") is no speech to the detector until then.
-                self.take(audio[cut:], self._turn.last_arrival)
+                self.take(audio[cut:], self._pauses.last_arrival)
         if close_waits and not complete:  # the pause ended meanwhile: a block held since ends it
-            self._turn.pause_again()
+            self._pauses.pause_again()
         for block in held:
             self.take(block.samples, block.arrival)
 
     def _undecided(self) -> None:
         """The speculation a decision waited for was dropped; the turn goes on."""
-        if self._end.deciding is not None:
+        if self._end_of_speech.deciding is not None:
             self._decided(False)
 
-    def _close_utterance(self) -> None:
+    def _pause_passed(self) -> None:
         """The pause after the utterance being collected has passed."""
-        if self._end.deciding is not None:  # the decision may end it elsewhere: it comes first
-            self._end.close_waits = True
+        if self._end_of_speech.deciding is not None:  # the decision may end it elsewhere: it comes first
+            self._end_of_speech.close_waits = True
             return
         self._background.utterance_closed()
         utterance = self._assembler.close()
-        if utterance is not None and not self._end.worth_transcribing():
+        if utterance is not None and not self._end_of_speech.worth_transcribing():
             self._statistics.discarded(DISCARDED_AFTER_SPEECH)
             self._action.utterance_dropped()
             self._collecting_since = None
         elif utterance is not None:
-            self._submit(utterance, False, self._turn.last_arrival)
-        self._end.closed(at_cut=False)
+            self._submit(utterance, False, self._pauses.last_arrival)
+        self._end_of_speech.closed(at_cut=False)
 
     def _so_far(self) -> Optional[UtteranceSoFar]:
         """The utterance being collected, None when there is none (or the node is disabled)."""
-        pending, last, in_force = self._assembler.pending_samples, self._turn.last_arrival, self._in_force
+        pending, last, in_force = self._assembler.pending_samples, self._pauses.last_arrival, self._in_force
         if not in_force.enabled or pending == 0:
             return None
         first = self._collecting_since if self._collecting_since is not None else last
@@ -263,7 +276,7 @@ class TurnRules:
             in_force.recognizer,
             in_force.grammar,
             origin,
-            self._end.speculation_cut(paused=self._turn.gap_passed()),
+            self._end_of_speech.speculation_cut(paused=self._pauses.gap_passed()),
         )
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:

@@ -43,7 +43,7 @@ class SpeechEnds:
         self._pad = round(min(PAD_SECONDS, hangover) * sample_rate)
         self._energies: List[float] = []
         self._rest = np.zeros(0, dtype=np.float64)
-        # _speech() of the frames so far, until more come: the node asks up to four times a block
+        # _speech() of the frames so far, until more come: the turn rules ask up to four times a block
         self._speech_frames: Optional[np.ndarray] = None
         self.samples = 0  # taken so far
         # The loudest frame of this speaker: kept across a cut at the end of speech, so that the

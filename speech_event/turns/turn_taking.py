@@ -4,7 +4,7 @@ speculate on it.
 An utterance ends ``speech_pause_period`` after its latest block, or ``early_pause`` after it once
 a speculation found a complete answer (early end of turn). Speculation may start
 ``speculation_gap`` after the latest block; with ``end_of_speech``, no block for that long is the end
-of speech (the robot's gate), where the node decides whether the turn ends. Each is one timer per
+of speech (the robot's gate), where the turn rules decide whether the turn ends. Each is one timer per
 utterance, not one per block:
 set at the first block, and when it fires early (more blocks came since) set again for the time
 after the latest block; a block that arrives once the pause is over, before its timer fired, ends

@@ -2,21 +2,20 @@
 
 import logging
 import threading
-from typing import Dict, List
+from typing import List
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fixtures.fakes import GatedRecognizer, SpyRecognizer
+from fixtures.fakes import Engines, GatedRecognizer, SpyRecognizer
 from fixtures.rig import AT_16K, Rig
 from speech_event.adapters.executors import ThreadExecutor
 from speech_event.config import SpeechEventConfig
-from speech_event.errors import ModelError
 from speech_event.interfaces.services import SET_ENABLED_SERVICE, SET_LANGUAGE_SERVICE
 from speech_event.messages import SetEnabledRequest, SetLanguageRequest
-from speech_event.ports import Recognizer, Transcript
+from speech_event.ports import Transcript
 
 HALF_SECOND = np.full(8000, 0.1, dtype=np.float32)
 
@@ -27,23 +26,6 @@ def _enable(rig: Rig, status: str) -> int:
 
 def _language(rig: Rig, language: str) -> int:
     return int(rig.bus.call(SET_LANGUAGE_SERVICE, SetLanguageRequest(language)).response)  # type: ignore[attr-defined]
-
-
-class Engines:
-    """One spy recognizer per language, built on demand and counted."""
-
-    def __init__(self, failing: tuple = ()) -> None:  # type: ignore[type-arg]
-        self.spies: Dict[str, SpyRecognizer] = {
-            language: SpyRecognizer(Transcript(language)) for language in ("english", "kinyarwanda")
-        }
-        self.failing = failing
-        self.built: List[str] = []
-
-    def build(self, language: str) -> Recognizer:
-        self.built.append(language)
-        if language in self.failing:
-            raise ModelError(f"{language} model is broken")
-        return self.spies[language]
 
 
 @pytest.mark.parametrize(

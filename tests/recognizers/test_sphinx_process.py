@@ -10,8 +10,8 @@ from typing import Iterator, List, Optional, Tuple, Union
 import numpy as np
 import pytest
 
-from bench.figures.measures import longest_stall
 from fixtures import recordings
+from fixtures.load import longest_stall
 from fixtures.processes import children, running
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import GrammarError, ModelError

@@ -3,57 +3,14 @@ failure, never a skip (tests/ensure_debian_packages.sh installs it)."""
 
 import os
 import subprocess
-import sys
-import time
-from pathlib import Path
-from typing import Dict, Iterator, List, Optional
+from typing import Dict, Iterator, List
 
 import pytest
-import rosgraph
 import rospy
 
-from fixtures.paths import ROOT
+from fixtures.ros import ros_environment, wait_for
 from harness.processes import Processes, free_port
-from speech_event import SOUND_DETECTION_DOWN
 from speech_event.adapters.ros import master_answers
-
-
-def ros_environment(master_port: int, tmp_path: Path) -> Dict[str, str]:
-    environment = dict(os.environ)
-    environment.update(
-        ROS_MASTER_URI=f"http://127.0.0.1:{master_port}",
-        ROS_IP="127.0.0.1",
-        ROS_HOME=str(tmp_path / "ros_home"),
-        ROS_PACKAGE_PATH=str(ROOT),
-        SPEECH_EVENT_PYTHON=sys.executable,
-        PYTHONPATH=str(ROOT),
-    )
-    return environment
-
-
-def spoken(texts: List[str]) -> List[str]:
-    """The texts but soundDetection's outage reports: the node publishes one every health-check
-    period while no driver publishes yet (or any longer), so how many depends on how fast the
-    processes start on a loaded machine."""
-    return [text for text in texts if text != SOUND_DETECTION_DOWN]
-
-
-def wait_for(condition, what: str, timeout: float = 30.0, seen=None) -> None:  # type: ignore[no-untyped-def]
-    """Poll ``condition``; on giving up, say what was awaited and, with ``seen``, what there was."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            found = f"; instead: {seen()}" if seen is not None else ""
-            raise AssertionError(f"gave up after {timeout:.0f} s waiting for {what}{found}")
-        time.sleep(0.01)
-
-
-def serves(service: str, uri: Optional[str] = None) -> bool:
-    """Whether the master (ROS_MASTER_URI's unless ``uri``) lists ``service``; no answer is no."""
-    try:
-        return bool(rosgraph.Master("/probe", master_uri=uri).lookupService(service))
-    except Exception:
-        return False
 
 
 def pytest_collection_modifyitems(items: List[pytest.Item]) -> None:

@@ -18,13 +18,13 @@ from std_msgs import msg as std_msgs
 from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
 from fixtures.paths import ROOT
+from fixtures.ros import ros_environment, spoken, wait_for
 from fixtures.tones_model import tones_tdt_model_directory
 from fixtures.whisper_tones_model import whisper_tones_model_directory
 from harness.processes import Processes, free_port
 from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.application import SHUTDOWN_GRACE_SECONDS
-from tests.ros.conftest import ros_environment, spoken, wait_for
 
 
 def _subscribers(master: rosgraph.Master, topic: str) -> List[str]:

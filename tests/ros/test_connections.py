@@ -9,8 +9,8 @@ import rospy
 import rospy.impl.tcpros_pubsub as tcpros_pubsub
 from std_msgs.msg import String
 
+from fixtures.ros import wait_for
 from harness.ros.connections import reaches_us
-from tests.ros.conftest import wait_for
 
 TOPIC = "/test/reaches_us"
 

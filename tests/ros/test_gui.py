@@ -17,6 +17,7 @@ import pytest
 
 from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
+from fixtures.ros import wait_for
 from harness.cli import open_demo_window
 from harness.processes import Processes
 from harness.scenario import Say, Scenario
@@ -48,7 +49,6 @@ from speech_event.messages import (
 )
 from speech_event.node import SpeechEventNode
 from speech_event.recognizers.tones import ToneRecognizer
-from tests.ros.conftest import wait_for
 
 NOON = 12 * 3600.0
 # What python -m harness demo --gui plays.

@@ -14,10 +14,10 @@ import pytest
 import rospy
 
 from fixtures.paths import ROOT
+from fixtures.ros import serves, wait_for
 from fixtures.wheel import build_wheel, install
 from harness.processes import Processes
 from speech_event.srv import SetLanguage
-from tests.ros.conftest import serves, wait_for
 
 
 @pytest.fixture(scope="module")

@@ -14,10 +14,10 @@ import soundfile
 
 from fixtures.audio import speak_tones
 from fixtures.paths import ROOT
+from fixtures.ros import ros_environment, serves, spoken, wait_for
 from fixtures.text_listener import received, write_listener
 from harness.processes import Processes, descendants, free_port
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
-from tests.ros.conftest import ros_environment, serves, spoken, wait_for
 
 LAUNCH = ROOT / "launch"
 

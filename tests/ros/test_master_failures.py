@@ -17,10 +17,10 @@ from typing import Dict
 import rosgraph
 
 from fixtures.application import APPLICATION
+from fixtures.ros import ros_environment, serves, wait_for
 from fixtures.text_listener import assert_errors_on_time, received, write_listener
 from harness.processes import Processes, descendants, free_port
 from speech_event.adapters.ros import master_answers
-from tests.ros.conftest import ros_environment, serves, wait_for
 
 FREEZE_SECONDS = 8.0
 PERIOD = 1.0

@@ -12,11 +12,11 @@ import pytest
 import rosgraph
 
 from fixtures.paths import ROOT
+from fixtures.ros import ros_environment
 from fixtures.scenario_files import SCENARIOS, TONES_SCENARIOS, shard
 from harness.processes import descendants
 from harness.ros.runner import route_address
 from speech_event import TEXT_TOPIC
-from tests.ros.conftest import ros_environment
 
 # Real time replays every scenario on the wall clock (about 500 s in all): in parts, side by side.
 REAL_TIME_SHARDS = 8

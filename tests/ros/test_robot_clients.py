@@ -22,11 +22,11 @@ from std_msgs import msg as std_msgs
 
 from fixtures.application import APPLICATION
 from fixtures.audio import speak_tones
+from fixtures.ros import serves, wait_for
 from harness.processes import Processes
 from harness.ros.connections import reaches_us
 from speech_event import SIGNAL_TOPIC, TEXT_TOPIC
 from speech_event.adapters.ros_interfaces import generate
-from tests.ros.conftest import serves, wait_for
 
 ROBOT_PACKAGE = "cssr_system"
 ACTION = "/speechEvent/recognise_speech_action"

@@ -12,11 +12,11 @@ import numpy as np
 import rosgraph
 
 from fixtures.paths import ROOT
+from fixtures.ros import wait_for
 from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.ros import RosClock, RosTransport, _to_ros, transcript_from_ros
 from speech_event.messages import Float32MultiArray, String, TranscriptMessage
 from speech_event.ports import PublisherStatus
-from tests.ros.conftest import wait_for
 
 STAND_IN = [
     sys.executable,

@@ -16,13 +16,13 @@ import pytest
 
 from fixtures.application import APPLICATION
 from fixtures.paths import ROOT
+from fixtures.ros import ros_environment, wait_for
 from fixtures.scenario_files import shard
 from fixtures.text_listener import assert_errors_on_time, received, write_listener
 from fixtures.two_hosts import Host, TwoHosts, two_hosts
 from harness.processes import Processes
 from harness.scenario import load_scenario
 from speech_event.config import SpeechEventConfig
-from tests.ros.conftest import ros_environment, wait_for
 
 MASTER_PORT = 11311  # the namespaces are the test's own: the standard port is free there
 PERIOD = 1.0
