@@ -64,9 +64,12 @@ class SpeechEventConfig:
     # A command grammar for every engine (speech_event/grammar.py: a JSGF file or a file of
     # phrases; empty: free speech). Its earlier name pocketsphinx_grammar is an alias.
     grammar: str = ""
-    # Speech is taken as a phrase of the grammar only when the best phrase is at most this much
-    # less likely than the engine's own free decoding (docs/grammar.md); None: the engine's own
-    # measured default (its unit is the engine's: nats for NeMo and Whisper).
+    # How much less likely than the engine's own free decoding of the same audio a phrase may be
+    # (log-probabilities, in nats; None: the engine's measured default). pocketsphinx publishes its
+    # grammar's best path only within it. NeMo and Whisper publish the phrase the free text is,
+    # or a phrase it is a mishearing of within it; Whisper also weighs the audio's evidence for a
+    # phrase against its score with nothing said, which may take a phrase the words did not
+    # (onnx/grammar_choice.py, docs/grammar.md).
     grammar_threshold: Optional[float] = None
     # pocketsphinx only: a keyword list instead of a grammar or its language model.
     pocketsphinx_keywords: str = ""
@@ -244,7 +247,7 @@ _FORMAT = KeyValueFormat(
         "grammar": file_path("a JSGF file or a file of phrases, one a line; empty: free speech"),
         "grammar_threshold": KeyRule(
             optional(number(float, -(10.0**6), 0.0)),
-            "a log-likelihood ratio, 0 or less, or nothing for the engine's default",
+            "nats a phrase may be below the free decoding, 0 or less, or nothing for the engine's default",
         ),
         "pocketsphinx_keywords": file_path("a keyword list file (pocketsphinx kws format); empty: none"),
         "model": KeyRule(choice(*MODEL_FAMILIES), " or ".join(MODEL_FAMILIES)),

@@ -15,20 +15,12 @@ from typing import List, Tuple
 
 Phones = Tuple[str, ...]
 
-# At most this share of a phrase's phones may differ (edits: a phone changed, added or dropped).
-# Measured with trained Whisper tiny.en and base, the robot's 32 commands and 65 other sentences in
-# four voices (docs/grammar.md): the commands heard as sound-alike words differed by 1 phone in 12
-# ("Place a music"), 1 in 9 ("Tell me, Joke.") and 2 in 11 ("What is it your name?"); the nearest
-# other speech by 2 in 6 ("Thanks." for "thank you": a third). Left out with it, at 3 in 10: "Wait,
-# Lord hand." for "wave your hand". The ratio still has the last word: "bring me the red book" is
-# "bring me the red cup" with 3 phones of 14 changed, and a model sure of "book" rejects "cup".
-SOUND_ALIKE_SHARE = 0.25
 # A text's pronunciations are every choice of its words' variants ("the": DH AH or DH IY), the
 # first ones in the dictionary's order: enough for a command, bounded for a long sentence.
 _MOST_PRONUNCIATIONS = 32
 
 
-def sounds_alike(heard: str, phrase: str, share: float = SOUND_ALIKE_SHARE) -> bool:
+def sounds_alike(heard: str, phrase: str, share: float) -> bool:
     """Whether ``heard`` is pronounced as ``phrase`` with at most ``share`` of the phrase's phones
     changed, added or dropped, its first and last phones kept (both spelt as a grammar spells them:
     lower case, words of a-z and '). The ends: a near miss says more before or after a command
