@@ -243,7 +243,6 @@ class SpeechEventNode:
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         """set_language: ``recognizer`` transcribes ``language`` from the next utterance on."""
         with self._lock:  # utterances closed before this finish with the old engine
-            self._turns.end_turn_if_over()
             self._turns.engine_or_grammar_changes()
             self._in_force.language, self._in_force.recognizer = language, recognizer
         _LOG.info("speechEvent transcribes %s now", language)
@@ -251,7 +250,6 @@ class SpeechEventNode:
     def _use_grammar(self, grammar: Optional[Grammar]) -> None:
         """set_grammar: ``grammar`` (None: free speech) is in force from the next utterance on."""
         with self._lock:  # utterances closed before this finish with the old grammar
-            self._turns.end_turn_if_over()
             self._turns.engine_or_grammar_changes()
             self._in_force.grammar = grammar
         _LOG.info("speechEvent grammar: %s", FREE_SPEECH if grammar is None else grammar.source)

@@ -1,6 +1,6 @@
 """The turn rules on the utterance being collected, behind one entry: the node hands each block it
-took to ``take``, and tells of changes (``end_turn_if_over``, ``engine_or_grammar_changes``,
-``drop_utterance``, ``stop``); the timers call back in here. Everything else stays inside:
+took to ``take``, and tells of changes (``engine_or_grammar_changes``; ``end_turn_if_over`` and
+``drop_utterance`` for set_enabled; ``stop``); the timers call back in here. Everything else stays inside:
 
 - the blocks go to the utterance assembler, and each utterance that closes goes to recognition
   (adopted by the speculation on exactly its audio, or queued for the worker);
@@ -170,8 +170,10 @@ class TurnRules:
             self._pauses.end_pause_if_over(now)
 
     def engine_or_grammar_changes(self) -> None:
-        """After end_turn_if_over: the background runs on the utterance so far used the old engine
-        or grammar; they are dropped, with any decision waiting on one."""
+        """Before the engine or the grammar changes: an utterance already over ends first
+        (end_turn_if_over); the background runs on the utterance so far used the old engine or
+        grammar, so they are dropped, with any decision waiting on one."""
+        self.end_turn_if_over()
         self._background.drop()
         self._undecided()
 

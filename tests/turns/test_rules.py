@@ -93,7 +93,6 @@ def test_a_grammar_set_after_the_pause_is_over_applies_to_the_next_utterance_onl
     # The pause is over, but the clock's timer has not run yet: the change of grammar ends the
     # utterance first, with what was in force while it was said.
     rig.clock.late_by(CONFIG.speech_pause_period + 0.5)
-    rig.rules.end_turn_if_over()
     rig.rules.engine_or_grammar_changes()
     rig.in_force.grammar = requested_grammar("yes|no")
     rig.block_at(CONFIG.speech_pause_period + 0.6)
