@@ -3,11 +3,12 @@ for the ROS replay's schedule (harness/schedule.py), and what a replay waits for
 
 from typing import List
 
+from fixtures.paths import ROOT
 from harness.memory_runner import run_in_memory
 from harness.outcome import SIM_TIME, Outcome, Published
 from harness.player import play
-from harness.report import report
-from harness.scenario import Say, Scenario, Silence
+from harness.report import passed, report
+from harness.scenario import Say, Scenario, Silence, load_scenario
 from harness.schedule import Due, HealthChecks, Schedule
 from harness.timeline import CallService, ComeUp, GoDown, Publish, SendGoal, Timeline, build_timeline
 from speech_event.config import SpeechEventConfig, speculation_gap_seconds
@@ -154,6 +155,31 @@ def test_a_replay_says_what_it_still_waits_for_and_a_failing_report_shows_each_w
     observed.published.append(Published(4.6, "go"))
     observed.partials.append(Published(2.5, "go"))
     assert due.missing(observed) == ""
+
+
+def test_a_result_the_node_gives_in_answer_to_a_goal_is_due_after_that_goal_not_before_it() -> None:
+    """The second goal preempts the first: in memory its result comes while the goal is sent. Due
+    before that goal, a ROS replay waited its whole text deadline for it (30 s), then went on."""
+    scenario = load_scenario(str(ROOT / "scenarios" / "listen_preempted.toml"), SpeechEventConfig())
+    schedule = Schedule.of(scenario)
+    second_goal = [
+        index for index, event in enumerate(build_timeline(scenario).events) if isinstance(event, SendGoal)
+    ][1]
+    preempted = schedule.rehearsal.results[0]
+    assert (preempted.text, preempted.played) == ("preempted: ", second_goal + 1)
+    assert schedule.due(preempted.time, second_goal).results == ()  # before it: nothing to wait for
+    assert schedule.due(preempted.time, second_goal + 1).results == ("preempted: ",)
+
+
+def test_a_replay_that_gave_up_waiting_fails_even_where_what_it_waited_for_came_later() -> None:
+    scenario = Scenario("one", "one", SpeechEventConfig(), (Say("go"),), ("go",), voice="tones")
+    observed = Outcome(published=[Published(2.0, "go")], clock=SIM_TIME)
+    assert passed(scenario, observed)
+    observed.gave_up.append(
+        "at t=1.000 s, waited 30.0 s for 1 text(s) that the node published by then in memory"
+    )
+    assert not passed(scenario, observed)
+    assert report(scenario, observed).startswith("FAIL  one  (one)\n")
 
 
 def test_a_text_memory_did_not_publish_does_not_stand_in_for_one_still_to_come() -> None:
