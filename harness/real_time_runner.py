@@ -19,7 +19,13 @@ from harness.memory_runner import SoundDetectionOnTheBus
 from harness.outcome import REAL_TIME, Outcome, Published, result_text
 from harness.player import play
 from harness.scenario import Scenario
-from harness.schedule import TEXT_DEADLINE, ScenarioWallClock, Schedule, block_just_played
+from harness.schedule import (
+    IN_MEMORY_ALIGN_MARGIN,
+    TEXT_DEADLINE,
+    ScenarioWallClock,
+    Schedule,
+    block_just_played,
+)
 from harness.timeline import Timeline, build_timeline
 from speech_event import TEXT_TOPIC
 from speech_event.adapters.executors import ThreadExecutor
@@ -63,9 +69,10 @@ class _RealTime:
         self.outcome.results.append(Published(self._scenario_time(), result_text(goal.state, transcription)))
 
     def begin(self, node_started: float, period: float) -> None:
-        """Start the scenario clock just after one of the node's health checks (``node_started``:
-        when its checks count from, on the wall clock); waits for it."""
-        self._clock.start(node_started, period)
+        """Start the scenario clock just after the node's start, or where that has passed, one of
+        its health checks (``node_started``: when its checks count from, on the wall clock); waits
+        for it."""
+        self._clock.start(node_started, period, IN_MEMORY_ALIGN_MARGIN)
         self.outcome = Outcome(clock=REAL_TIME)  # what the node said before t = 0 is no part of it
 
     def advance_to(self, when: float) -> None:

@@ -33,8 +33,11 @@ TEXT_DEADLINE = 30.0
 TEXT_WAIT_AFTER_MISS = 1.0
 # ROS time is whole nanoseconds: a time sent as a float and read back is within this of it.
 CLOCK_RESOLUTION = 1e-6
-# Real time: how long the harness needs, after the node is ready, before the scenario's t = 0.
+# Real time: how long the harness needs, after the node is ready, before the scenario's t = 0: on
+# a roscore, for the node's process; in memory nothing (the node is ready once constructed, and its
+# first check comes a period later: waiting for it cost every scenario up to 5 s of wall clock).
 ALIGN_MARGIN = 0.5
+IN_MEMORY_ALIGN_MARGIN = 0.0
 # Real time: the node's checks come this much before the scenario's multiples of the period. In
 # sim time (and in memory) a check due at T runs before the events at T; so here too.
 CHECK_LEAD = 0.05
@@ -149,10 +152,11 @@ class ScenarioWallClock:
         self._start = time.monotonic()
         self._period = math.inf
 
-    def start(self, node_started: float, period: float) -> None:
+    def start(self, node_started: float, period: float, margin: float = ALIGN_MARGIN) -> None:
         """Make t = 0 the instant scenario_start gives, and wait for it."""
         self._period = period
-        self._start = time.monotonic() + (scenario_start(node_started, time.time(), period) - time.time())
+        now = time.time()
+        self._start = time.monotonic() + (scenario_start(node_started, now, period, margin) - now)
         time.sleep(max(0.0, self._start - time.monotonic()))
 
     def now(self) -> float:
@@ -187,12 +191,14 @@ class ScenarioWallClock:
             self._start += math.ceil(late / self._period) * self._period
 
 
-def scenario_start(node_started: float, now: float, period: float) -> float:
+def scenario_start(node_started: float, now: float, period: float, margin: float = ALIGN_MARGIN) -> float:
     """Real time: when (on the wall clock of ``now``) the scenario's t = 0 is, so that the node's
     health checks, every ``period`` from ``node_started``, fall at multiples of the period on the
-    scenario clock (CHECK_LEAD before them), at least ALIGN_MARGIN from ``now``."""
-    checks_passed = math.ceil((now + ALIGN_MARGIN - node_started) / period)
-    return node_started + checks_passed * period + CHECK_LEAD
+    scenario clock (CHECK_LEAD before them), at least ``margin`` from ``now``: CHECK_LEAD after the
+    node's start where that is still far enough ahead (its first check then comes at t = period, as
+    in memory), else just after the first check that is."""
+    periods = max(0, math.ceil((now + margin - CHECK_LEAD - node_started) / period))
+    return node_started + periods * period + CHECK_LEAD
 
 
 def block_just_played(events: Sequence[Event], played: int, now: float) -> Optional[Tuple[float, float]]:

@@ -40,6 +40,15 @@ def test_t_0_comes_just_after_a_health_check_at_least_the_margin_from_now() -> N
     assert scenario_start(node_started=100.0, now=104.8, period=5.0) == 110.0 + CHECK_LEAD
 
 
+def test_with_no_margin_t_0_comes_just_after_the_nodes_start_while_that_is_ahead() -> None:
+    # in memory: the node is ready once constructed, and t = 0 need not wait for its first check
+    assert scenario_start(node_started=100.0, now=100.01, period=5.0, margin=0.0) == 100.0 + CHECK_LEAD
+    assert scenario_start(node_started=100.0, now=100.0 + CHECK_LEAD + 0.01, period=5.0, margin=0.0) == (
+        105.0 + CHECK_LEAD
+    )
+    assert scenario_start(node_started=100.0, now=100.01, period=5.0) == 105.0 + CHECK_LEAD  # ROS's margin
+
+
 def test_the_clock_starts_after_a_check_and_sleeps_to_each_time(clock_time: _Time) -> None:
     clock = ScenarioWallClock()
     clock.start(node_started=clock_time.time() - 1.0, period=5.0)
