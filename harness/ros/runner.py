@@ -54,7 +54,7 @@ from harness.schedule import (
     Schedule,
     block_just_played,
 )
-from harness.timeline import Event, SendGoal, build_timeline
+from harness.timeline import ComeUp, Event, GoDown, SendGoal, build_timeline
 from speech_event import PARTIAL_TOPIC, SIGNAL_TOPIC, TEXT_TOPIC, TRANSCRIPT_TOPIC
 from speech_event.adapters.ros import generated_class, master_answers, transcript_from_ros
 from speech_event.config import format_config
@@ -357,8 +357,14 @@ class RosReplay:
     def _align_with_the_node(self, period: float) -> None:
         """Real time: start the scenario clock at one of the node's health-check instants, so its
         checks fall at multiples of the period on the scenario clock, as in sim time. Our node says
-        when it started (its checks count from there); for another, when it became ready will do."""
-        self._wall.start(float(rospy.get_param(START_TIME_PARAM, time.time())), period)
+        when it started (its checks count from there); for another, when it became ready will do.
+        Where soundDetection never goes down a check finds it up whenever it runs, and publishes
+        nothing: the clock starts at once (waiting for the node's first check, 5 s after its start,
+        cost each such scenario about 4 s)."""
+        if not any(isinstance(event, (GoDown, ComeUp)) for event in self._events):
+            self._wall.start_now(period)
+        else:
+            self._wall.start(float(rospy.get_param(START_TIME_PARAM, time.time())), period)
         self._outcome = self._new_outcome()  # what the node said before the scenario's t = 0 is no part of it
 
     def _node_name(self) -> str:

@@ -6,7 +6,14 @@ from typing import List
 import pytest
 
 from harness import schedule
-from harness.schedule import CHECK_LEAD, LATE_ANSWER, ScenarioWallClock, block_just_played, scenario_start
+from harness.schedule import (
+    ALIGN_MARGIN,
+    CHECK_LEAD,
+    LATE_ANSWER,
+    ScenarioWallClock,
+    block_just_played,
+    scenario_start,
+)
 from harness.timeline import CallService, Event, Publish
 
 
@@ -47,6 +54,13 @@ def test_with_no_margin_t_0_comes_just_after_the_nodes_start_while_that_is_ahead
         105.0 + CHECK_LEAD
     )
     assert scenario_start(node_started=100.0, now=100.01, period=5.0) == 105.0 + CHECK_LEAD  # ROS's margin
+
+
+def test_where_checks_cannot_matter_the_clock_starts_the_margin_from_now(clock_time: _Time) -> None:
+    # soundDetection never goes down: the node's next check, up to a period away, is not waited for
+    clock = ScenarioWallClock()
+    clock.start_now(period=5.0)
+    assert clock.now() == 0.0 and clock_time.slept == [pytest.approx(ALIGN_MARGIN)]
 
 
 def test_the_clock_starts_after_a_check_and_sleeps_to_each_time(clock_time: _Time) -> None:
