@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
+import pytest
 
 from fixtures import recordings
 from fixtures.load import cores_kept_busy
@@ -96,13 +97,21 @@ def _three_runs(recognizer: str, config: str = "") -> Dict[str, Run]:
     }
 
 
-def _side_by_side(tmp_path: Path, said: Sequence[Recording], runs: Dict[str, Run]) -> Dict[str, List[str]]:
-    """Every run at once, playing the same session, beside two busy processes: each run's texts."""
-    session = _session(tmp_path / "session.wav", said)
+# Recordings, and the runs that play one session of them.
+Play = Tuple[Sequence[Recording], Dict[str, Run]]
+
+
+def _side_by_side(tmp_path: Path, *plays: Play) -> Dict[str, List[str]]:
+    """Every run of every play at once, each play's runs on one session of its recordings, beside
+    two busy processes: each run's texts."""
+    starts = []
+    for number, (said, runs) in enumerate(plays):
+        session = _session(tmp_path / f"session{number}.wav", said)
+        starts += [(name, session, recognizer, config) for name, (recognizer, config) in runs.items()]
     with cores_kept_busy():
         drivers = {
             name: _start(tmp_path / f"run{index}", session, recognizer, config)
-            for index, (name, (recognizer, config)) in enumerate(runs.items())
+            for index, (name, session, recognizer, config) in enumerate(starts)
         }
         return {name: _texts(driver) for name, driver in drivers.items()}
 
@@ -113,32 +122,47 @@ def _same_in_every_run(runs: Dict[str, List[str]]) -> List[str]:
     return first
 
 
+POCKETSPHINX_SAID = CARDS + LIBRIVOX[:2]
+CARDS_GRAMMAR = f"grammar {recordings.CARDS_GRAMMAR}\n"
+WHISPER_RUNS = {
+    **_three_runs("whisper-tiny.en"),
+    "int8": ("whisper-tiny.en", "quantization int8\n" + NO_PARTIALS),
+}
+
+
+@pytest.fixture(scope="module")
+def pocketsphinx_and_whisper(tmp_path_factory: pytest.TempPathFactory) -> Dict[str, List[str]]:
+    """pocketsphinx's six runs and tiny.en's four play side by side, each engine its own session:
+    one session's wall clock for both tests, not two (issue 56, item 3); pocketsphinx's runs add
+    little CPU beside Whisper's."""
+    return _side_by_side(
+        tmp_path_factory.mktemp("pocketsphinx_and_whisper"),
+        (POCKETSPHINX_SAID, {**_three_runs("pocketsphinx", CARDS_GRAMMAR), **_three_runs("pocketsphinx")}),
+        (LIBRIVOX, WHISPER_RUNS),
+    )
+
+
 def test_pocketsphinx_gives_the_same_texts_in_every_run_in_a_grammar_and_with_its_language_model(
-    tmp_path: Path,
+    pocketsphinx_and_whisper: Dict[str, List[str]],
 ) -> None:
     """The issue's runs: before, three of cards 003, 004, 005 gave 'seven seven clubs', '' and
     'five five', '' every time; librivox 0870 read 'and mr john guess' or 'and mr chavez'."""
-    said = CARDS + LIBRIVOX[:2]
-    grammar = f"grammar {recordings.CARDS_GRAMMAR}\n"
-    texts = _side_by_side(
-        tmp_path, said, {**_three_runs("pocketsphinx", grammar), **_three_runs("pocketsphinx")}
+    texts = pocketsphinx_and_whisper
+    within_cards = _same_in_every_run(
+        {name: texts[name] for name in _three_runs("pocketsphinx", CARDS_GRAMMAR)}
     )
-    within_cards = _same_in_every_run({name: texts[name] for name in _three_runs("pocketsphinx", grammar)})
     assert within_cards == [recording.text for recording in CARDS]  # each card, no librivox sentence
     free = _same_in_every_run({name: texts[name] for name in _three_runs("pocketsphinx")})
-    assert len(free) == len(said)
+    assert len(free) == len(POCKETSPHINX_SAID)
 
 
 def test_trained_whisper_gives_the_same_texts_in_every_run_librivox_within_5_percent_wer_int8_at_most_2_points_worse(
-    tmp_path: Path,
+    pocketsphinx_and_whisper: Dict[str, List[str]],
 ) -> None:
-    runs = {
-        **_three_runs("whisper-tiny.en"),
-        "int8": ("whisper-tiny.en", "quantization int8\n" + NO_PARTIALS),
-    }
-    texts = _side_by_side(tmp_path, LIBRIVOX, runs)
-    int8 = texts.pop("int8")
-    fp32 = _same_in_every_run(texts)
+    int8 = pocketsphinx_and_whisper["int8"]
+    fp32 = _same_in_every_run(
+        {name: pocketsphinx_and_whisper[name] for name in _three_runs("whisper-tiny.en")}
+    )
     assert len(fp32) == len(int8) == len(LIBRIVOX)
     references = " ".join(recording.text for recording in LIBRIVOX)
     fp32_wer = recordings.word_error_rate(references, " ".join(fp32))
@@ -161,7 +185,7 @@ def test_the_tones_engines_give_the_same_texts_in_every_run(tmp_path: Path) -> N
         recognizer: _three_runs(recognizer, "publish_unrecognized true\n") for recognizer in TONES_ENGINES
     }
     texts = _side_by_side(
-        tmp_path, said, {name: run for runs in per_engine.values() for name, run in runs.items()}
+        tmp_path, (said, {name: run for runs in per_engine.values() for name, run in runs.items()})
     )
     for recognizer, runs in per_engine.items():
         assert len(_same_in_every_run({name: texts[name] for name in runs})) == len(said), recognizer
@@ -176,5 +200,5 @@ def test_with_smart_turn_deciding_the_same_readings_give_the_same_texts_in_every
         "smart-turn 2": ("whisper-tiny.en", heard),
         "smart-turn no partials": ("whisper-tiny.en", heard + NO_PARTIALS),
     }
-    texts = _same_in_every_run(_side_by_side(tmp_path, recordings.ljspeech(), runs))
+    texts = _same_in_every_run(_side_by_side(tmp_path, (recordings.ljspeech(), runs)))
     assert len(texts) >= len(recordings.ljspeech())
