@@ -169,17 +169,19 @@ class ScenarioWallClock:
 
     def start(self, node_started: float, period: float, margin: float = ALIGN_MARGIN) -> None:
         """Make t = 0 the instant scenario_start gives, and wait for it."""
-        self._period = period
         now = time.time()
-        self._start = time.monotonic() + (scenario_start(node_started, now, period, margin) - now)
-        time.sleep(max(0.0, self._start - time.monotonic()))
+        self._begin_in(scenario_start(node_started, now, period, margin) - now, period)
 
     def start_now(self, period: float, margin: float = ALIGN_MARGIN) -> None:
         """Make t = 0 ``margin`` from now, whenever the node's checks come (a scenario in which
         soundDetection never goes down: they find it up, whenever they run), and wait for it."""
+        self._begin_in(margin, period)
+
+    def _begin_in(self, seconds: float, period: float) -> None:
+        """Make t = 0 ``seconds`` from now, moved later by whole ``period``s when late, and wait for it."""
         self._period = period
-        self._start = time.monotonic() + margin
-        time.sleep(margin)
+        self._start = time.monotonic() + seconds
+        time.sleep(max(0.0, self._start - time.monotonic()))
 
     def now(self) -> float:
         """Now on the scenario clock."""

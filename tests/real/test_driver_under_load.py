@@ -122,6 +122,11 @@ def _same_in_every_run(runs: Dict[str, List[str]]) -> List[str]:
     return first
 
 
+def _same_in(texts: Dict[str, List[str]], runs: Dict[str, Run]) -> List[str]:
+    """The texts of ``runs`` among all that played side by side, the same in each of them."""
+    return _same_in_every_run({name: texts[name] for name in runs})
+
+
 POCKETSPHINX_SAID = CARDS + LIBRIVOX[:2]
 CARDS_GRAMMAR = f"grammar {recordings.CARDS_GRAMMAR}\n"
 WHISPER_RUNS = {
@@ -148,11 +153,9 @@ def test_pocketsphinx_gives_the_same_texts_in_every_run_in_a_grammar_and_with_it
     """The issue's runs: before, three of cards 003, 004, 005 gave 'seven seven clubs', '' and
     'five five', '' every time; librivox 0870 read 'and mr john guess' or 'and mr chavez'."""
     texts = pocketsphinx_and_whisper
-    within_cards = _same_in_every_run(
-        {name: texts[name] for name in _three_runs("pocketsphinx", CARDS_GRAMMAR)}
-    )
+    within_cards = _same_in(texts, _three_runs("pocketsphinx", CARDS_GRAMMAR))
     assert within_cards == [recording.text for recording in CARDS]  # each card, no librivox sentence
-    free = _same_in_every_run({name: texts[name] for name in _three_runs("pocketsphinx")})
+    free = _same_in(texts, _three_runs("pocketsphinx"))
     assert len(free) == len(POCKETSPHINX_SAID)
 
 
@@ -160,9 +163,7 @@ def test_trained_whisper_gives_the_same_texts_in_every_run_librivox_within_5_per
     pocketsphinx_and_whisper: Dict[str, List[str]],
 ) -> None:
     int8 = pocketsphinx_and_whisper["int8"]
-    fp32 = _same_in_every_run(
-        {name: pocketsphinx_and_whisper[name] for name in _three_runs("whisper-tiny.en")}
-    )
+    fp32 = _same_in(pocketsphinx_and_whisper, _three_runs("whisper-tiny.en"))
     assert len(fp32) == len(int8) == len(LIBRIVOX)
     references = " ".join(recording.text for recording in LIBRIVOX)
     fp32_wer = recordings.word_error_rate(references, " ".join(fp32))
@@ -188,7 +189,7 @@ def test_the_tones_engines_give_the_same_texts_in_every_run(tmp_path: Path) -> N
         tmp_path, (said, {name: run for runs in per_engine.values() for name, run in runs.items()})
     )
     for recognizer, runs in per_engine.items():
-        assert len(_same_in_every_run({name: texts[name] for name in runs})) == len(said), recognizer
+        assert len(_same_in(texts, runs)) == len(said), recognizer
 
 
 def test_with_smart_turn_deciding_the_same_readings_give_the_same_texts_in_every_run(tmp_path: Path) -> None:
