@@ -3,6 +3,7 @@
 
 import importlib.util
 import zlib
+from typing import List
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ import pytest
 from fixtures.festival import speak_festival
 from fixtures.noises import at_level, read_audio
 from fixtures.pipecat_smart_turn import as_pipecat_pads, pipecats_features
-from fixtures.recordings import ljspeech
+from fixtures.recordings import Recording, ljspeech
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError, ModelError
 from speech_event.recognizers.whisper.features import SAMPLE_RATE
@@ -26,6 +27,14 @@ from speech_event.turns.smart_turn import (
 # The readings that end a sentence (the others stop mid-sentence: LJ Speech cuts the book's
 # sentences into pieces).
 ENDS_A_SENTENCE = ("LJ001-0002", "LJ001-0005", "LJ001-0008")
+# The model is int8: its kernels differ by CPU, and for this reading's end, which stops at a word a
+# sentence may end with ("... in the Exhibition"), they decide: 0.25 with AVX-512 VNNI, 0.42 on an
+# AVX2 CPU, 0.60 there after 48 kHz and back. The tests assert what the audio decides, not that.
+NEAR_THE_THRESHOLD = ("LJ001-0001",)
+
+
+def _far_from_the_threshold() -> List[Recording]:
+    return [recording for recording in ljspeech() if recording.path.stem not in NEAR_THE_THRESHOLD]
 
 
 def test_the_features_are_pipecats_on_speech_noise_and_a_turn_longer_than_the_window() -> None:
@@ -48,9 +57,9 @@ def test_the_features_are_pipecats_on_speech_noise_and_a_turn_longer_than_the_wi
 
 def test_it_hears_the_readings_that_end_a_sentence_complete_and_the_others_not() -> None:
     model = SmartTurn()
-    for recording in ljspeech():
+    for recording in _far_from_the_threshold():
         completion = model.completion(read_audio(recording.path, SAMPLE_RATE))
-        # as recorded: at the sentence ends 0.97 to 0.99, elsewhere 0.25 at most: none near 0.5
+        # as recorded: at the sentence ends 0.97 to 0.99, elsewhere 0.07 at most: none near 0.5
         assert (completion > 0.5) == (recording.path.stem in ENDS_A_SENTENCE), (
             recording.path.stem,
             completion,
@@ -61,7 +70,7 @@ def test_the_turn_heard_for_a_configuration_resamples_its_audio() -> None:
     assert turn_heard_for(SpeechEventConfig()) is None
     heard = turn_heard_for(SpeechEventConfig(turn_end_model="smart-turn", sample_rate=48000))
     assert heard is not None
-    for recording in ljspeech():
+    for recording in _far_from_the_threshold():
         assert heard(read_audio(recording.path, 48000), False) == (recording.path.stem in ENDS_A_SENTENCE)
 
 
