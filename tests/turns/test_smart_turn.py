@@ -28,8 +28,8 @@ from speech_event.turns.smart_turn import (
 # sentences into pieces).
 ENDS_A_SENTENCE = ("LJ001-0002", "LJ001-0005", "LJ001-0008")
 # The model is int8: its kernels differ by CPU, and for this reading's end, which stops at a word a
-# sentence may end with ("... in the Exhibition"), they decide: 0.25 with AVX-512 VNNI, 0.42 on an
-# AVX2 CPU, 0.60 there after 48 kHz and back. The tests assert what the audio decides, not that.
+# sentence may end with ("... in the Exhibition"), they decide: 0.25 at most with AVX-512 VNNI, 0.42 on
+# an AVX2 CPU, 0.60 there after 48 kHz and back. The tests assert what the audio decides, not that.
 NEAR_THE_THRESHOLD = ("LJ001-0001",)
 
 
