@@ -176,8 +176,15 @@ class SpeechEventNode:
             return self._in_force.enabled
 
     def start(self) -> None:
-        """Advertise, subscribe, serve, and start the health checks."""
+        """Advertise, start the health checks, subscribe and serve.
+
+        The start time is read, and /diagnostics advertised, before the node listens: a replay
+        plays once the node listens, so no block comes before the time the checks count from. Read
+        last, on a busy machine the action server took long enough to set up that the clock had
+        moved on by 'hello', and the checks came 0.43 s after the replay's (outage_crash on ROS)."""
+        self._started_at = self._clock.now()
         self._publication.start(self._transport)
+        self._health.start(self._started_at)
         self._transport.subscribe(SIGNAL_TOPIC, Float32MultiArray, self.on_signal)
         self._transport.serve(SET_ENABLED_SERVICE, SET_ENABLED, self._control.on_set_enabled)
         self._transport.serve(SET_LANGUAGE_SERVICE, SET_LANGUAGE, self._control.on_set_language)
@@ -185,8 +192,6 @@ class SpeechEventNode:
         self._transport.serve_action(
             ACTION_NAME, RECOGNISE_SPEECH, self._action.on_goal, self._action.on_cancel
         )
-        self._started_at = self._clock.now()
-        self._health.start(self._started_at)
         _LOG.info("speechEvent started: %s", self._config)
 
     def stop(self) -> None:

@@ -157,6 +157,32 @@ def test_a_text_connection_made_late_loses_no_text(tmp_path: Path) -> None:
     assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
 
 
+def test_a_node_slow_to_start_is_heard_from_before_the_scenario_plays(tmp_path: Path) -> None:
+    """On a busy machine our node's start (its action server) took as long as 'hello': the replay
+    played it meanwhile, the node's health checks counted from 0.43 s, and outage_crash's check
+    at 2 s missed the crash (CI). Here the action server comes 2 s after the node listens, every
+    time: the node's checks count from before it listens, and the replay waits for it to say so."""
+    slow_node = tmp_path / "slow_node.py"
+    slow_node.write_text(
+        "import sys, time\n"
+        "from speech_event.adapters.ros import RosTransport\n"
+        "serve_action = RosTransport.serve_action\n"
+        "def late(*arguments):\n"
+        "    time.sleep(2.0)\n"
+        "    serve_action(*arguments)\n"
+        "RosTransport.serve_action = late\n"
+        "from speech_event.application import main\n"
+        "sys.exit(main(['-c', sys.argv[1], '--recognizer', sys.argv[2]]))\n"
+    )
+    result = _harness(
+        _own_roscore_environment(tmp_path),
+        "--node-command",
+        f"{sys.executable} {slow_node} {{config}} {{recognizer}}",
+        "scenarios/outage_crash.toml",
+    )
+    assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
+
+
 def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) -> None:
     marker = tmp_path / "ran"
     wrapper = tmp_path / "other_node.py"
