@@ -1,6 +1,7 @@
 """Plays a scenario to the node on the in-memory bus with a fake clock: no sleeping, deterministic
 (harness/real_time_runner.py plays it there on the wall clock)."""
 
+import contextlib
 from typing import Callable, List, Optional
 
 from harness.catalog import ScenarioEngines
@@ -154,12 +155,15 @@ def run_in_memory(
     recognition_seconds: float = 0.0,
     bus: Optional[InMemoryBus] = None,
     clock: Optional[FakeClock] = None,
+    engines: Optional[ScenarioEngines] = None,
 ) -> Outcome:
     """Every message the node published on /speechEvent/text, with its scenario time, every service
     response and every action result; and when the node's own timers fired (``node_timers``).
 
     ``recognition_seconds`` is how much scenario time each recognition takes. ``bus`` and ``clock``:
-    ones that others watch too (the demo's window).
+    ones that others watch too (the demo's window). ``engines``: built for the scenario's
+    recognizer already (simulated), and kept after the run (harness/catalog.py says when runs may
+    share them); by default the run's own.
     """
     timeline = build_timeline(scenario)
     clock = clock or FakeClock()
@@ -167,7 +171,11 @@ def run_in_memory(
     sound_detection = SoundDetectionOnTheBus(runner.bus)
     node_clock = _NodeClock(clock, runner.outcome.node_timers)
     executor = ClockExecutor(node_clock, recognition_seconds)
-    with ScenarioEngines(scenario.recognizer, scenario.config, simulated=True) as engines:
+    with contextlib.ExitStack() as stack:
+        if engines is None:
+            engines = stack.enter_context(
+                ScenarioEngines(scenario.recognizer, scenario.config, simulated=True)
+            )
         node = SpeechEventNode(
             scenario.config, runner.bus, node_clock, engines.build(), executor, engines.build
         )
