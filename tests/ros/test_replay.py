@@ -40,6 +40,17 @@ def _own_roscore_environment(tmp_path: Path) -> Dict[str, str]:
     return environment
 
 
+def _against_node(
+    tmp_path: Path, source: str, placeholders: str, *arguments: str
+) -> "subprocess.CompletedProcess[str]":
+    """The harness replaying against the node that the Python ``source`` runs, given the runner's
+    ``placeholders`` ({config}, {recognizer}), with ``arguments`` after --node-command."""
+    node = tmp_path / "node_under_test.py"
+    node.write_text(source)
+    command = f"{sys.executable} {node} {placeholders}"
+    return _harness(_own_roscore_environment(tmp_path), "--node-command", command, *arguments)
+
+
 @pytest.mark.parametrize("part", range(SIM_TIME_SHARDS))
 def test_every_scenario_passes_on_ros_with_the_in_memory_expectations(tmp_path: Path, part: int) -> None:
     scenarios = shard(SCENARIOS, part, SIM_TIME_SHARDS)
@@ -82,8 +93,7 @@ def test_a_failing_scenario_on_ros_shows_its_diff_and_exits_1(tmp_path: Path) ->
 def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_the_replay_waited(tmp_path: Path) -> None:
     """The replay waits for an expected text until it comes or the deadline passes (a fixed second
     failed CI on a busy machine); here the node under test never publishes it."""
-    silent = tmp_path / "silent_node.py"
-    silent.write_text(
+    silent = (
         "import sys\n"
         "from speech_event.pipeline.publication import Publication\n"
         "Publication.conclude = lambda self, job, outcome: None  # recognizes, publishes nothing\n"
@@ -91,10 +101,10 @@ def test_a_text_that_never_comes_fails_the_scenario_saying_how_long_the_replay_w
         "sys.exit(main(['-c', sys.argv[1], '--recognizer', 'fake']))\n"
     )
     began = time.monotonic()
-    result = _harness(
-        _own_roscore_environment(tmp_path),
-        "--node-command",
-        f"{sys.executable} {silent} {{config}}",
+    result = _against_node(
+        tmp_path,
+        silent,
+        "{config}",
         "--text-deadline",
         "3",
         "scenarios/single_utterance.toml",
@@ -162,8 +172,7 @@ def test_a_node_slow_to_start_is_heard_from_before_the_scenario_plays(tmp_path: 
     played it meanwhile, the node's health checks counted from 0.43 s, and outage_crash's check
     at 2 s missed the crash (CI). Here the action server comes 2 s after the node listens, every
     time: the node's checks count from before it listens, and the replay waits for it to say so."""
-    slow_node = tmp_path / "slow_node.py"
-    slow_node.write_text(
+    slow_node = (
         "import sys, time\n"
         "from speech_event.adapters.ros import RosTransport\n"
         "serve_action = RosTransport.serve_action\n"
@@ -174,30 +183,19 @@ def test_a_node_slow_to_start_is_heard_from_before_the_scenario_plays(tmp_path: 
         "from speech_event.application import main\n"
         "sys.exit(main(['-c', sys.argv[1], '--recognizer', sys.argv[2]]))\n"
     )
-    result = _harness(
-        _own_roscore_environment(tmp_path),
-        "--node-command",
-        f"{sys.executable} {slow_node} {{config}} {{recognizer}}",
-        "scenarios/outage_crash.toml",
-    )
+    result = _against_node(tmp_path, slow_node, "{config} {recognizer}", "scenarios/outage_crash.toml")
     assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
 
 
 def test_node_command_runs_the_scenarios_against_another_node(tmp_path: Path) -> None:
     marker = tmp_path / "ran"
-    wrapper = tmp_path / "other_node.py"
-    wrapper.write_text(
+    other_node = (
         "import sys\n"
         f"open({str(marker)!r}, 'w').write(sys.argv[1])\n"
         "from speech_event.application import main\n"
         "sys.exit(main(['-c', sys.argv[1], '--recognizer', 'fake']))\n"
     )
-    result = _harness(
-        _own_roscore_environment(tmp_path),
-        "--node-command",
-        f"{sys.executable} {wrapper} {{config}}",
-        "scenarios/single_utterance.toml",
-    )
+    result = _against_node(tmp_path, other_node, "{config}", "scenarios/single_utterance.toml")
     assert result.stdout.splitlines()[-1] == "1 passed, 0 failed", result.stdout + result.stderr
     assert marker.read_text().endswith("speech_event_configuration.ini")
 
