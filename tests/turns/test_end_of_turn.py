@@ -4,7 +4,6 @@ the room after it is not transcribed, speech that goes on is kept, and however l
 takes, the same blocks give the same texts."""
 
 import dataclasses
-from pathlib import Path
 from typing import Callable, List, Optional, Tuple
 
 import numpy as np
@@ -13,10 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fixtures.audio import noise, speak_tones
-from fixtures.every_scenario import RECOGNITION_SECONDS, check_scenario_ending_at_end_of_speech
 from fixtures.paths import ROOT
 from fixtures.rig import AT_16K, Rig
-from fixtures.scenario_files import SCENARIOS
 from harness.memory_runner import run_in_memory
 from harness.scenario import load_scenario
 from speech_event.config import GRAMMAR_END_OF_SPEECH, SpeechEventConfig, end_of_speech_seconds
@@ -281,12 +278,8 @@ def test_the_text_is_ready_when_the_end_is_heard_if_the_engine_takes_less_than_t
     assert _timed(taking_a_tenth) == _timed(at_once)
 
 
-@pytest.mark.parametrize("recognition_seconds", RECOGNITION_SECONDS)
-@pytest.mark.parametrize("path", SCENARIOS, ids=lambda path: path.stem)
-def test_every_scenario_passes_with_the_turn_ending_at_the_end_of_speech(
-    path: Path, recognition_seconds: float
-) -> None:
-    check_scenario_ending_at_end_of_speech(path, recognition_seconds)
+# Every scenario with the turn ending at the end of speech: tests/test_every_scenario.py, on the
+# engines of its other runs of the scenario.
 
 
 def test_an_engine_that_cannot_be_stopped_speculates_only_on_the_audio_up_to_the_end_of_speech() -> None:
