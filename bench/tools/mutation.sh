@@ -9,8 +9,11 @@ mutmut="$(dirname "$("$python" -c 'import sys; print(sys.executable)')")/mutmut"
 checkout=$(cd "$(dirname "$0")/../.." && pwd)
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
+# Without the folders the tools write as they run (a test session beside this one writes
+# .hypothesis: tar said "file changed as we read it" and failed the py env).
 tar -C "$checkout" --exclude=./.git --exclude=./.tox --exclude=./mutants --exclude='*.egg-info' \
-    --exclude=__pycache__ -cf - . | tar -xf - -C "$scratch"
+    --exclude=__pycache__ --exclude=./.hypothesis --exclude=./.pytest_cache --exclude=./.mypy_cache \
+    --exclude=./.ruff_cache -cf - . | tar -xf - -C "$scratch"
 tests='"tests/pipeline/test_validate.py", "tests/pipeline/test_assembly.py", "tests/pipeline/test_transcript.py", "tests/interfaces/test_periodic.py"'
 cat >> "$scratch/pyproject.toml" <<TOML
 
