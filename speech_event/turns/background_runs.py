@@ -61,6 +61,8 @@ class UtteranceSoFar:
     # samples up to it, at once, whatever the gap. None: the speaker is still speaking, or no
     # decision on the end of speech is made now (off, or not with this engine and grammar).
     cut: Optional[int] = None
+    # Whether a speculation on it can serve what the node publishes (EndOfTurn.worth_speculating).
+    worth_speculating: bool = True
 
 
 class Turn(Protocol):
@@ -184,7 +186,9 @@ class BackgroundRuns:
     def speculate(self) -> None:
         """Speculate on the utterance being collected if its gap has passed and the rules allow it."""
         so_far = self.so_far()
-        if so_far is None or (so_far.cut is None and not self.turn.gap_passed()):
+        if so_far is None or not so_far.worth_speculating:
+            return
+        if so_far.cut is None and not self.turn.gap_passed():
             return
         if so_far.cut is not None:  # one on other audio is worthless: the cut moved since
             self._speculation.drop(keep=so_far.cut)

@@ -134,6 +134,17 @@ class EndOfTurn:
         self.decided()
         self.closed(at_cut=False)
 
+    def worth_speculating(self) -> bool:
+        """Whether a speculation on the utterance so far can serve what the node publishes (issue 58):
+        not on audio that a pause would throw away (worth_transcribing), nor, where the engine and
+        grammar in force decide on the end of speech, before any speech is heard in it: no decision
+        is made on such audio, so a speculation's text would serve only if the pause ended the
+        utterance as it is, and the block that comes first (most often, the speech) makes it
+        worthless. Without it the closed utterance is recognized as without speculation."""
+        if not self.on or self._ends.heard_speech():
+            return True
+        return not (self._after_cut or self._decides())
+
     def worth_transcribing(self) -> bool:
         """Whether the utterance ending now is transcribed: not when it follows a cut at the end of
         speech and no speech was heard in it (the room after the speaker stopped)."""

@@ -279,6 +279,7 @@ class TurnRules:
             in_force.grammar,
             origin,
             self._end_of_speech.speculation_cut(paused=self._pauses.gap_passed()),
+            self._end_of_speech.worth_speculating(),
         )
 
     def _submit(self, audio: Audio, more_follows: bool, last_block_at: float) -> None:

@@ -163,10 +163,39 @@ def test_what_follows_the_cut_begins_the_next_utterance_so_no_audio_is_lost_betw
     assert rig.texts() == ["stop", "yes"]
     stretches = set(_starts(audio, engine.given))  # utterances and speculations on them
     starts = sorted({start for start, _ in stretches})
-    assert len(starts) == 3  # "stop", "yes", and the room after it (speculated on, then dropped)
+    assert len(starts) == 2  # "stop" and "yes": the room after it is neither transcribed nor speculated on
     for before, after in zip(starts, starts[1:]):
         # an utterance begins where the one before it was cut: no sample between them is lost
         assert after in {end for start, end in stretches if start == before}
+
+
+def _room_then_a_gap_then(word: str, config: SpeechEventConfig) -> Tuple[Rig, _Given]:
+    """0.5 s of the room's blocks (a noisy room through the gate), 0.5 s without a block, ``word``'s
+    blocks and 1 s of the room's, in the command grammar."""
+    engine = _Given()
+    rig = Rig(config, engine)
+    assert rig.bus.call(SET_GRAMMAR_SERVICE, SetGrammarRequest(COMMANDS)).response == 1  # type: ignore[attr-defined]
+    rig.speak(_room(0.5), BLOCK)
+    rig.clock.advance(0.5)
+    rig.speak(_speech(word, 1.0), BLOCK)
+    rig.clock.advance(config.speech_pause_period + 1.0)
+    return rig, engine
+
+
+def test_where_the_end_of_speech_decides_no_speculation_runs_on_audio_without_speech() -> None:
+    # Issue 58: the room before the word (no decision is made on it, and the word makes a
+    # speculation on it worthless) and the room after the cut (a pause throws it away).
+    rig, engine = _room_then_a_gap_then("stop", CONFIG)
+    assert rig.texts() == ["stop"]
+    assert rig.node.speculations.started == 1  # on the utterance up to the cut after "stop"
+    assert len(engine.given) == 1
+    # Waiting for the pause instead, the node speculates at each gap: on the room alone, then on
+    # the room and "stop" (the room after it is the same utterance).
+    waited, waited_engine = _room_then_a_gap_then("stop", dataclasses.replace(CONFIG, end_of_speech=0.0))
+    assert waited.texts() == ["stop"]
+    assert waited.node.speculations.started == 2
+    room = int(0.5 * RATE)
+    assert [stretch.size for stretch in waited_engine.given] == [room, room + _speech("stop", 1.0).size]
 
 
 def test_in_free_speech_a_complete_answer_ends_the_turn_and_other_words_wait_for_the_pause() -> None:
