@@ -162,7 +162,7 @@ def people_speech() -> List[Speech]:
     ]
 
 
-def _node(
+def node_on_bus(
     config: SpeechEventConfig, engine: Recognizer, clock: Clock, executor: Executor, grammar: str
 ) -> Tuple[SpeechEventNode, InMemoryBus, List[Tuple[float, str]], List[TranscriptMessage]]:
     """The node on an in-memory bus; the texts it publishes as they come (the wall clock), and its
@@ -242,7 +242,7 @@ def latency(
 ) -> Timed:
     """The first text of ``audio``, said in real time, and where its time went."""
     executor = ThreadExecutor()
-    node, bus, heard, finals = _node(config, engine, SystemClock(), executor, grammar)
+    node, bus, heard, finals = node_on_bus(config, engine, SystemClock(), executor, grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     sent = publish_in_real_time(sound_detection.publish, audio)
     deadline = time.monotonic() + config.speech_pause_period + 30.0
@@ -414,7 +414,7 @@ def played_on_fake_clock(
     ""): each the seconds the clock moves on, then the block sent (at RATE). Each speculation runs
     at once: none is stopped halfway."""
     clock = FakeClock()
-    node, bus, heard, _ = _node(config, engine, clock, ClockExecutor(clock), grammar)
+    node, bus, heard, _ = node_on_bus(config, engine, clock, ClockExecutor(clock), grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     for seconds, block in steps:
         clock.advance(seconds)
@@ -434,7 +434,7 @@ def played_in_real_time(
     from the start; the block at RATE) sent at their times on the wall clock, with the thread
     executor: a block stops the speculation it makes worthless, as on the robot."""
     executor = ThreadExecutor()
-    node, bus, heard, _ = _node(config, engine, SystemClock(), executor, grammar)
+    node, bus, heard, _ = node_on_bus(config, engine, SystemClock(), executor, grammar)
     sound_detection = bus.advertise(SIGNAL_TOPIC, Float32MultiArray, node="soundDetection")
     began = time.monotonic()
     for when, block in blocks:
