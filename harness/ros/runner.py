@@ -460,7 +460,11 @@ class RosReplay:
         node = self._start_node(scenario)
         # soundDetection's process starts beside the node's (each takes a second of Python and rospy)
         stand_ins = StandIns(
-            self.processes, scenario.source, self._options.base_config, self._node_connections
+            self.processes,
+            scenario.source,
+            self._options.base_config,
+            self._node_connections,
+            outages=any(isinstance(event, GoDown) for event in timeline.events),
         )
         self._wait_for_node(node)
         if any(isinstance(event, SendGoal) for event in timeline.events):
