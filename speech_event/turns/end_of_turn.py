@@ -83,13 +83,13 @@ class EndOfTurn:
         """Where a speculation may transcribe up to before the end is heard, so its text is there
         when the decision comes: the speech's end once its pad is taken, or once no block came
         for speculation_gap (``paused``), where a decision on that pause would cut (gap_end);
-        None while speech goes on, and once a decision on this utterance found the turn going on
-        (worth_speculating)."""
+        None while speech goes on."""
         if not self.on or self.deciding is not None:
             return self.deciding
-        if self._no_more_decisions() or self._decided > 0:
+        if self._no_more_decisions():
             return None
-        return self._after_last_block() if paused else self._ends.padded_end()
+        cut = self._after_last_block() if paused else self._ends.padded_end()
+        return cut if cut is not None and cut > self._decided else None
 
     def gap_end(self) -> Optional[int]:
         """A cut to decide when no block came for end_of_speech: after the last block, if speech
@@ -135,20 +135,15 @@ class EndOfTurn:
         self.closed(at_cut=False)
 
     def worth_speculating(self) -> bool:
-        """Whether a speculation on the utterance so far can serve what the node publishes, where the
-        engine and grammar in force decide on the end of speech (issue 58). A decision's own
-        speculation always. Else not on audio that a pause would throw away (worth_transcribing);
-        not before any speech is heard in it (no decision is made on such audio, so the text would
-        serve only if the pause ended the utterance as it is, and the block that comes first, most
-        often the speech, makes it worthless); and not once a decision on it found the turn going
-        on (a person talking, not answering: each pause in their speech would start one that the
-        next word throws away, six times the work of a minute's talk; the next end heard is decided
-        when heard). Without one, the closed utterance is recognized as without speculation."""
-        if not self.on or self.deciding is not None:
+        """Whether a speculation on the utterance so far can serve what the node publishes (issue 58):
+        not on audio that a pause would throw away (worth_transcribing), nor, where the engine and
+        grammar in force decide on the end of speech, before any speech is heard in it: no decision
+        is made on such audio, so a speculation's text would serve only if the pause ended the
+        utterance as it is, and the block that comes first (most often, the speech) makes it
+        worthless. Without it the closed utterance is recognized as without speculation."""
+        if not self.on or self._ends.heard_speech():
             return True
-        if not self._ends.heard_speech():
-            return not (self._after_cut or self._decides())
-        return not (self._decided > 0 and self._decides())
+        return not (self._after_cut or self._decides())
 
     def worth_transcribing(self) -> bool:
         """Whether the utterance ending now is transcribed: not when it follows a cut at the end of
