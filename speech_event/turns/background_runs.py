@@ -7,7 +7,9 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 - a speculation may start once the speaker has paused for ``speculation_gap`` (or a decision on the
   end of speech waits for it), on an engine that can be stopped (one that cannot only on the
   audio up to the end of speech, with a grammar in force), with the worker idle and no
-  speculation there; it cancels a partial in progress (it may be the final text);
+  speculation there, on audio whose text can serve (EndOfTurn.worth_speculating: not the room
+  after a cut, nor audio with no speech heard where the end of speech decides); it cancels a
+  partial in progress (it may be the final text);
 - a partial may start when one is due (``partial_period``), with the worker idle and no speculation
   there, on audio that grew since the last;
 - a block cancels the speculation (what it transcribes is no longer the utterance), not the
