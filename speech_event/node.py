@@ -227,6 +227,7 @@ class SpeechEventNode:
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
             self._turns.take(signal.samples, arrival)
+            self._turns.taken(self._clock.now())
 
     # -- runtime control --------------------------------------------------------------------------
 

@@ -125,6 +125,12 @@ class TurnRules:
 
     # -- what the node tells ------------------------------------------------------------------------
 
+    def taken(self, when: float) -> None:
+        """The callback that took a block returns at ``when`` (TurnTaking.taken). Not while a
+        decision holds the blocks: those are taken later, by their arrivals."""
+        if self._end_of_speech.deciding is None:
+            self._pauses.taken(when)
+
     def take(self, samples: Audio, arrival: float) -> None:
         """A block that arrived at ``arrival``, taken now or held for a decision."""
         # First: a speculation on the utterance it ends still counts, and a decision on the end of

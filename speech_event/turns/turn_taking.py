@@ -111,6 +111,9 @@ class TurnTaking:
         self._end_of_speech = end_of_speech_seconds(config)
         self._deciding = deciding
         self.last_arrival = 0.0
+        # When the node had taken the latest block that came: later than its arrival when the
+        # callback waited (for the lock, the CPU), and the next block could not come sooner.
+        self._taken_at = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
         self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap)
@@ -128,6 +131,14 @@ class TurnTaking:
             self._silence.arm()
         else:
             self._silence.cancel()
+
+    def taken(self, when: float) -> None:
+        """The callback that took the latest block returns at ``when``: the pause, the gap and
+        end_of_speech count from then, not from the block's arrival. A source that publishes in
+        the callback's thread (the driver) or queues behind it (rospy) sends the next block after it
+        returns: a callback that waited 0.33 s on a busy machine was followed by a gap of 0.33 s in
+        the blocks, heard as the end of speech where nobody paused."""
+        self._taken_at = when
 
     def end_pause_if_over(self, arrival: float) -> None:
         """Before a block that arrived at ``arrival`` is taken: if the pause after the latest block
@@ -169,9 +180,13 @@ class TurnTaking:
         self._gap.cancel()
         self._silence.cancel()
 
+    def _since(self) -> float:
+        """Since when no block came that the node could have taken."""
+        return max(self.last_arrival, self._taken_at)
+
     def _pause_due(self) -> float:
         pause = self._config.early_pause if self._ends_early else self._config.speech_pause_period
-        return self.last_arrival + pause
+        return self._since() + pause
 
     def _silence_seconds(self) -> float:
         """end_of_speech while it decides with the engine and grammar in force; else never."""
@@ -181,10 +196,10 @@ class TurnTaking:
         return min(speculation_gap_seconds(self._config, self._deciding()), self._silence_seconds())
 
     def _gap_due(self) -> float:
-        return self.last_arrival + self._gap_seconds()
+        return self._since() + self._gap_seconds()
 
     def _silence_due(self) -> float:
-        return self.last_arrival + self._end_of_speech
+        return self._since() + self._end_of_speech
 
     def _silence_heard(self, on_silence: Callable[[], None]) -> Callable[[], None]:
         def heard() -> None:  # a grammar may have been cleared since the timer was set

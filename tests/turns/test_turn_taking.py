@@ -464,3 +464,28 @@ def test_a_block_after_end_of_speech_without_one_hears_the_end_although_the_time
     clock.time = now
     turn.end_pause_if_over(now)
     assert heard == silences
+
+
+def test_a_callback_that_returned_late_moves_the_end_of_speech_the_gap_and_the_pause_with_it() -> None:
+    # The block at 0 was taken by a callback that returned at 0.33 (it waited for the lock): the
+    # driver, which publishes in that thread, sends the next one at 0.40. No end of speech at 0.375
+    # is heard: end_of_speech, the gap and the pause count from 0.33.
+    turn = Turn(END_OF_SPEECH)
+    turn.block(0.0)
+    turn.turn.taken(0.33)
+    turn.turn.end_pause_if_over(0.40)
+    turn.block(0.40)
+    assert turn.silences == []
+    turn.clock.advance_to(10.0)
+    assert turn.silences == [0.40 + 0.375]
+    assert turn.ends == [0.40 + 1.5]
+
+
+def test_a_callback_that_returned_late_delays_what_no_block_after_it_ends() -> None:
+    turn = Turn(END_OF_SPEECH)
+    turn.block(0.0)
+    turn.turn.taken(0.25)
+    turn.clock.advance_to(10.0)
+    assert turn.gaps == [0.25 + 0.125]
+    assert turn.silences == [0.25 + 0.375]
+    assert turn.ends == [0.25 + 1.5]
