@@ -8,6 +8,12 @@ turn at 16 kHz, zero-padded at the front, normalised to zero mean and unit varia
 80-band log-mel of that buffer (reflected at both ends; transformers' WhisperFeatureExtractor,
 which pipecat's ``_whisper_features.py`` vendors); its output the probability that the turn is
 complete, complete above 0.5 (as pipecat reads it).
+
+The file is int8 in QDQ form; it runs as float (exporters/dequantize.py: its weights dequantized,
+its activations not rounded), because onnxruntime's integer kernels differ by CPU and round the
+activations: with them a reading's score moved by 0.11 when its samples moved by one part in a
+million, and a reading's end scored 0.42 on one CPU and under 0.25 on another. As float the same
+audio scores the same to a part in a million on every CPU (docs/decisions.md, 2026-12-07).
 """
 
 import importlib.util
@@ -18,6 +24,7 @@ import numpy as np
 
 from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
+from speech_event.exporters.dequantize import float_graph
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.whisper.features import SAMPLE_RATE, window_log_mel
 
@@ -61,6 +68,22 @@ def smart_turn_features(audio: np.ndarray) -> np.ndarray:
     return window_log_mel(buffer, MEL_BANDS)
 
 
+def float_smart_turn(path: Path) -> bytes:
+    """The model at ``path`` as a float graph (the module's docstring), serialized for onnxruntime;
+    ModelError when onnx, which reads it, is not installed, or the file is not such a model."""
+    try:
+        import onnx
+    except ImportError:
+        raise ModelError(
+            "turn_end_model smart-turn needs onnx to run Smart Turn's int8 file as float: pip install onnx"
+        ) from None
+    try:
+        serialized: bytes = float_graph(onnx.load(str(path))).SerializeToString()
+    except Exception as problem:  # protobuf's DecodeError, OSError, float_graph's ValueError
+        raise ModelError(f"{path}: not Smart Turn's QDQ ONNX model: {problem}") from None
+    return serialized
+
+
 class SmartTurn:
     """Smart Turn's ONNX model on onnxruntime (CPU, one thread, as pipecat runs it): the
     probability that the turn in 16 kHz audio is complete."""
@@ -69,6 +92,7 @@ class SmartTurn:
         import onnxruntime
 
         path = smart_turn_model_path() if path is None else path
+        graph = float_smart_turn(path)
         options = onnxruntime.SessionOptions()
         options.log_severity_level = 3
         # One thread: it runs on the recognition worker, beside the engine's own threads.
@@ -76,9 +100,7 @@ class SmartTurn:
         options.inter_op_num_threads = 1
         options.execution_mode = onnxruntime.ExecutionMode.ORT_SEQUENTIAL
         try:
-            self._session = onnxruntime.InferenceSession(
-                str(path), options, providers=["CPUExecutionProvider"]
-            )
+            self._session = onnxruntime.InferenceSession(graph, options, providers=["CPUExecutionProvider"])
         except Exception as problem:  # onnxruntime raises its own exception types
             raise ModelError(f"{path}: onnxruntime cannot load Smart Turn: {problem}") from None
 
