@@ -2,7 +2,8 @@
 speculate on it.
 
 An utterance ends ``speech_pause_period`` after its latest block, or ``early_pause`` after it once
-a speculation found a complete answer (early end of turn). Speculation may start
+a speculation found a complete answer (early end of turn); each counts from when the callback that
+took the block returned, if later than its arrival (TurnTaking.taken). Speculation may start
 ``speculation_gap`` after the latest block; with ``end_of_speech``, no block for that long is the end
 of speech (the robot's gate), where the turn rules decide whether the turn ends. Each is one timer per
 utterance, not one per block:
