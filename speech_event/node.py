@@ -209,13 +209,14 @@ class SpeechEventNode:
 
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition, never raises."""
+        stamped = isinstance(message, Received)  # by its transport as read (rospy)
         arrival = message.received_at if isinstance(message, Received) else self._clock.now()
         try:
-            self._take(message, arrival)
+            self._take(message, arrival, stamped)
         except Exception:  # validation names every bad message; this is the last line of defence
             _LOG.exception("unexpected failure handling a message on %s; the node goes on", SIGNAL_TOPIC)
 
-    def _take(self, message: object, arrival: float) -> None:
+    def _take(self, message: object, arrival: float, stamped: bool) -> None:
         signal = validate_signal(message, self._max_samples)
         with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
             if not self._in_force.enabled:  # the robot is speaking: its own voice is not to be transcribed
@@ -227,7 +228,8 @@ class SpeechEventNode:
             if signal.clipped:
                 self._rejections.record_clipped(signal.clipped)
             self._turns.take(signal.samples, arrival)
-            self._turns.taken(self._clock.now())
+            if not stamped:  # called back in the publisher's thread: its next block waited for this
+                self._turns.taken(self._clock.now())
 
     # -- runtime control --------------------------------------------------------------------------
 
