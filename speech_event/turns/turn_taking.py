@@ -136,9 +136,10 @@ class TurnTaking:
     def taken(self, when: float) -> None:
         """The callback that took the latest block returns at ``when``: the pause, the gap and
         end_of_speech count from then, not from the block's arrival. A source that publishes in
-        the callback's thread (the driver) or queues behind it (rospy) sends the next block after it
+        the callback's thread (the driver on the in-memory bus) sends the next block after it
         returns: a callback that waited 0.33 s on a busy machine was followed by a gap of 0.33 s in
-        the blocks, heard as the end of speech where nobody paused."""
+        the blocks, heard as the end of speech where nobody paused. (rospy stamps a block as it reads
+        it: the node does not call this for those.)"""
         self._taken_at = when
 
     def end_pause_if_over(self, arrival: float) -> None:
