@@ -209,10 +209,10 @@ class SpeechEventNode:
 
     def on_signal(self, message: object) -> None:
         """The subscriber callback: cheap, never blocks on recognition, never raises."""
-        stamped = isinstance(message, Received)  # by its transport as read (rospy)
-        arrival = message.received_at if isinstance(message, Received) else self._clock.now()
+        # stamped by its transport as read (rospy), or arriving now, in the publisher's thread
+        stamp = message.received_at if isinstance(message, Received) else None
         try:
-            self._take(message, arrival, stamped)
+            self._take(message, self._clock.now() if stamp is None else stamp, stamp is not None)
         except Exception:  # validation names every bad message; this is the last line of defence
             _LOG.exception("unexpected failure handling a message on %s; the node goes on", SIGNAL_TOPIC)
 

@@ -84,19 +84,25 @@ def float_smart_turn(path: Path) -> bytes:
     return serialized
 
 
-class SmartTurn:
-    """Smart Turn's ONNX model on onnxruntime (CPU, one thread, as pipecat runs it): the
-    probability that the turn in 16 kHz audio is complete."""
+# Threads a call: one, as pipecat runs it. Two (sleeping between operators) took 86 ms a call
+# instead of 100 alone, but where the node asks, right after the engine's text, Whisper tiny.en
+# int8's text and the call took 446 ms on two against 450 on one (median, the robot's 12 commands
+# x 5 rounds, interleaved, the AVX2 EPYC's 2 cores: bench/figures/smart_turn.py --after-engine).
+THREADS = 1
 
-    def __init__(self, path: Optional[Path] = None) -> None:
+
+class SmartTurn:
+    """Smart Turn's ONNX model on onnxruntime (CPU): the probability that the turn in 16 kHz audio
+    is complete."""
+
+    def __init__(self, path: Optional[Path] = None, threads: int = THREADS) -> None:
         import onnxruntime
 
         path = smart_turn_model_path() if path is None else path
         graph = float_smart_turn(path)
         options = onnxruntime.SessionOptions()
         options.log_severity_level = 3
-        # One thread: it runs on the recognition worker, beside the engine's own threads.
-        options.intra_op_num_threads = 1
+        options.intra_op_num_threads = threads
         options.inter_op_num_threads = 1
         options.execution_mode = onnxruntime.ExecutionMode.ORT_SEQUENTIAL
         try:

@@ -99,6 +99,14 @@ def test_the_same_audio_within_a_part_in_a_million_scores_the_same_within_a_part
             assert abs(model.completion(moved) - completion) < 1e-4
 
 
+def test_on_two_threads_the_readings_score_as_on_one_within_a_part_in_a_million() -> None:
+    # bench/figures/smart_turn.py times both: the same arithmetic, split across threads
+    one, two = SmartTurn(threads=1), SmartTurn(threads=2)
+    for recording in ljspeech():
+        audio = read_audio(recording.path, SAMPLE_RATE)
+        assert abs(one.completion(audio) - two.completion(audio)) < 1e-6
+
+
 def test_the_model_runs_as_float_with_no_quantized_operator() -> None:
     graph = onnx.load_from_string(float_smart_turn(smart_turn_model_path())).graph
     operators = {node.op_type for node in graph.node}
