@@ -5,8 +5,9 @@ call by call. The turn so far is each LJ Speech reading of
 tests/recordings; milliseconds, median and 90th percentile over ``--rounds``.
 
 With ``--after-engine``, what the node's decision waits for: Whisper tiny.en int8's text of each of
-the robot's first 12 commands (festival's slt) and then the call, on each thread count, interleaved
-with the text alone (the trained weights of the test extra). Printed; nothing is asserted.
+the robot's first 12 commands (festival's slt) and then the call, on each thread count, and the
+call alongside the text as the node asks it (HeardAlongside), interleaved with the text alone (the
+trained weights of the test extra). Printed; nothing is asserted.
 
     python -m bench.figures.smart_turn [--rounds 5] [--after-engine]
 """
@@ -26,7 +27,7 @@ from fixtures.recordings import ljspeech
 from harness.catalog import ScenarioEngines
 from speech_event.config import SpeechEventConfig
 from speech_event.recognizers.whisper.features import SAMPLE_RATE
-from speech_event.turns.smart_turn import THREADS, SmartTurn, smart_turn_features, with_pause
+from speech_event.turns.smart_turn import THREADS, HeardAlongside, SmartTurn, smart_turn_features
 
 ENGINE = "tiny.en int8"
 
@@ -67,25 +68,37 @@ def calls(models: Dict[int, SmartTurn], rounds: int) -> None:
 
 
 def after_engine(models: Dict[int, SmartTurn], rounds: int) -> None:
-    """The engine's text, then the call on the same audio (the gate's pause after it)."""
+    """The engine's text, then the call on the same audio (the gate's pause after it); and the
+    call alongside the text (HeardAlongside, as the node asks it): when the text is there, and
+    when both are."""
     recognizer, quantization = ENGINES[ENGINE]
     commands = [speak_festival(phrase, "slt", SAMPLE_RATE) for phrase in robot_commands()[:12]]
+    model = models[THREADS]
+    alongside = HeardAlongside(lambda audio, paused: model.complete(audio, paused))
     with ScenarioEngines(recognizer, SpeechEventConfig(quantization=quantization)) as engines:
         engine = engines.build()
         for audio in commands:  # loaded and warm before anything is timed
             engine.transcribe(audio)
         times: Dict[str, List[float]] = {"the text alone": []}
         times.update({f"the text, then {on(threads)}": [] for threads in models})
+        times.update({"alongside: the text": [], "alongside: both": []})
         for _ in range(rounds):
             for audio in commands:
                 times["the text alone"].append(milliseconds(engine.transcribe, audio))
-                for threads, model in models.items():
+                for threads, each in models.items():
 
-                    def both(audio: np.ndarray = audio, model: SmartTurn = model) -> None:
+                    def both(audio: np.ndarray = audio, each: SmartTurn = each) -> None:
                         engine.transcribe(audio)
-                        model.completion(with_pause(audio))
+                        each.complete(audio, paused=True)
 
                     times[f"the text, then {on(threads)}"].append(milliseconds(both))
+                began = time.perf_counter()
+                verdict = alongside.ask(audio, True)
+                engine.transcribe(audio)
+                times["alongside: the text"].append(1000 * (time.perf_counter() - began))
+                verdict.result()
+                times["alongside: both"].append(1000 * (time.perf_counter() - began))
+    alongside.close()
     report(f"{ENGINE}'s text and Smart Turn v3.2, {len(commands)} commands x {rounds} rounds", times)
 
 

@@ -22,13 +22,17 @@ Incremental engine's partial feed. Closed utterances always come first. The rule
 
 A speculation that ends with the utterance still being collected may end the turn early
 (``early_pause``; or ``end_of_speech``: the turn rules asked for a decision on a cut, and the speculation
-starts at once, on the samples up to it), and its text is a partial too when it is new. Every
-method is called under the node's lock; the jobs run on the worker and take the lock.
+starts at once, on the samples up to it), and its text is a partial too when it is new. In free
+speech with a turn-end model (turn_end_model), the model hears the speculation's audio on a thread
+of its own while the engine transcribes it (smart_turn.HeardAlongside), and the decision waits for
+its verdict only where the text needs it. Every method is called under the node's lock; the jobs
+run on the worker and take the lock.
 """
 
 import functools
 import logging
 import threading
+from concurrent.futures import Future
 from dataclasses import InitVar, dataclass, field
 from typing import Callable, Optional, Protocol
 
@@ -39,7 +43,7 @@ from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionO
 from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Clock, Incremental, Recognizer, Stoppable, Transcript
 from speech_event.turns.partials import PartialCounts, PartialFeed, PartialRules
-from speech_event.turns.smart_turn import TurnHeard
+from speech_event.turns.smart_turn import HeardAlongside, TurnHeard
 from speech_event.turns.speculation import (
     Speculation,
     SpeculationCounts,
@@ -109,6 +113,7 @@ class BackgroundRuns:
         self._partial_timer = RearmingTimer(self.clock, self.lock, self._partials.due, self.partial)
         self.speculations = self._speculation.counts
         self.partials = self._partials.counts
+        self._hearing = HeardAlongside(self.turn_heard) if self.turn_heard is not None else None
 
     # -- what the node tells them -------------------------------------------------------------------
 
@@ -165,9 +170,11 @@ class BackgroundRuns:
         self._partial_timer.cancel()
 
     def stop(self) -> None:
-        """The node stops: cancel both, unset the partial timer."""
+        """The node stops: cancel both, unset the partial timer, close the turn-end model's thread."""
         self.drop()
         self._partial_timer.cancel()
+        if self._hearing is not None:
+            self._hearing.close()
 
     def worker_free(self) -> None:
         """The worker finished a closed utterance: the utterance being collected waited for it."""
@@ -224,20 +231,19 @@ class BackgroundRuns:
 
     # -- the jobs, on the worker --------------------------------------------------------------------
 
-    def _recognize_unless_cancelled(self, run: Speculation, audio: Audio) -> Optional[RecognitionOutcome]:
-        """``run``'s recognition of ``audio``; None when it was cancelled before."""
+    def _running(self, run: Speculation) -> bool:
+        """Whether ``run`` runs now: False when it was cancelled before."""
         with self.lock:
-            if run.cancelled:
-                return None
-            run.running = True
-        return self.worker.recognize(audio, run.recognizer, run.grammar)
+            run.running = not run.cancelled
+            return run.running
 
     def _speculated(self, speculation: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """Transcribe the utterance so far; publish it only if it closed as it is."""
-        outcome = self._recognize_unless_cancelled(speculation, audio)
-        if outcome is None:
+        if not self._running(speculation):
             return
-        heard = self._heard_complete(speculation, audio, outcome)
+        verdict = self._hear_alongside(speculation, audio)
+        outcome = self.worker.recognize(audio, speculation.recognizer, speculation.grammar)
+        heard = self._heard_complete(speculation, outcome, verdict)
         partial: Optional[Transcript] = None
         with self.lock:
             job = self._speculation.finished(speculation, outcome, heard)
@@ -256,19 +262,28 @@ class BackgroundRuns:
         elif partial is not None:
             self.worker.publication.partial(partial, origin)
 
-    def _heard_complete(self, speculation: Speculation, audio: Audio, outcome: RecognitionOutcome) -> bool:
-        """Whether the audio says the turn is complete too, asked only where the rules need it (free
-        speech, a complete text that is not one of complete_answers), off the lock: a function of
-        the audio alone, like the text."""
-        if self.turn_heard is None or not self._speculation.needs_the_audio(speculation, outcome):
+    def _hear_alongside(self, speculation: Speculation, audio: Audio) -> "Optional[Future[bool]]":
+        """In free speech with a turn-end model, its verdict on the speculation's audio, asked now,
+        while the engine transcribes it (HeardAlongside); None where no verdict can count."""
+        if self._hearing is None or speculation.grammar is not None:
+            return None
+        return self._hearing.ask(audio, speculation.at_last_block)
+
+    def _heard_complete(
+        self, speculation: Speculation, outcome: RecognitionOutcome, verdict: "Optional[Future[bool]]"
+    ) -> bool:
+        """Whether the audio says the turn is complete too, where the rules need it (free speech, a
+        complete text that is not one of complete_answers), off the lock: a function of the audio
+        alone, like the text."""
+        if verdict is None or not self._speculation.needs_the_audio(speculation, outcome):
             return True
-        return self.turn_heard(audio, speculation.at_last_block)
+        return verdict.result()
 
     def _partial_run(self, run: Speculation, audio: Audio, origin: TextOrigin) -> None:
         """A Stoppable engine's text of the utterance so far."""
-        outcome = self._recognize_unless_cancelled(run, audio)
-        if outcome is None:
+        if not self._running(run):
             return
+        outcome = self.worker.recognize(audio, run.recognizer, run.grammar)
         with self.lock:
             partial = self._partials.finished(run, outcome)
             self.partial()  # more audio came meanwhile

@@ -15,7 +15,7 @@ import pytest
 from fixtures.fakes import SpyRecognizer
 from speech_event.adapters.fake_clock import FakeClock, FakeTimer
 from speech_event.config import SpeechEventConfig
-from speech_event.grammar import Grammar
+from speech_event.grammar import Grammar, phrases_grammar
 from speech_event.pipeline.publication import TextOrigin
 from speech_event.pipeline.recognition_queue import RecognitionJob, RecognitionOutcome
 from speech_event.pipeline.watchdog import Watchdog
@@ -23,6 +23,7 @@ from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Recognizer, Transcript
 from speech_event.turns.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.turns.partials import PartialCounts
+from speech_event.turns.smart_turn import HeardAlongside, TurnHeard
 from speech_event.turns.speculation import SpeculationCounts
 
 CONFIG = SpeechEventConfig(
@@ -124,6 +125,7 @@ class Collecting:
     engine: Recognizer
     audio: Audio = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.float32))
     idle: bool = True
+    grammar: Optional[Grammar] = None
 
     def add(self, samples: int) -> None:
         self.audio = np.concatenate([self.audio, np.full(samples, 0.1, dtype=np.float32)])
@@ -131,7 +133,7 @@ class Collecting:
     def so_far(self) -> Optional[UtteranceSoFar]:
         if self.audio.size == 0:
             return None
-        return UtteranceSoFar(self.audio.size, self.audio.copy, self.engine, None, ORIGIN)
+        return UtteranceSoFar(self.audio.size, self.audio.copy, self.engine, self.grammar, ORIGIN)
 
     def job(self, number: int = 1) -> RecognitionJob:
         """The utterance collected so far, closed."""
@@ -142,6 +144,7 @@ class Collecting:
 class Turn:
     paused: bool = True  # the speaker has paused for speculation_gap
     ended_early: int = 0
+    speculated_on: List[Tuple[int, bool]] = dataclasses.field(default_factory=list)  # samples, complete
 
     def gap_passed(self) -> bool:
         return self.paused
@@ -150,7 +153,7 @@ class Turn:
         self.ended_early += 1
 
     def speculated(self, samples: int, complete: bool) -> None:
-        pass
+        self.speculated_on.append((samples, complete))
 
 
 @dataclasses.dataclass
@@ -173,24 +176,31 @@ def _sizes(rig: Rig) -> Sizes:
     return rig.node.engine
 
 
-def _rig(engine: Optional[Recognizer] = None, config: SpeechEventConfig = CONFIG) -> Rig:
+def _rig(
+    engine: Optional[Recognizer] = None,
+    config: SpeechEventConfig = CONFIG,
+    turn_heard: Optional[TurnHeard] = None,
+) -> Rig:
     clock, lock, jobs, published, turn = FakeClock(), threading.Lock(), Jobs(), Recorder(), Turn()
     node = Collecting(engine if engine is not None else Sizes())
     made: List[BackgroundRuns] = []  # the watchdog asks the runs, which are made after it
     watchdog = Watchdog(clock, lock, config.recognition_timeout, lambda job: made[0].running_for(job))
     worker = Worker(jobs, _recognize, lambda: 0.0, published, watchdog)
-    runs = BackgroundRuns(config, clock, lock, worker, turn, node.so_far, lambda: node.idle)
+    runs = BackgroundRuns(config, clock, lock, worker, turn, node.so_far, lambda: node.idle, turn_heard)
     made.append(runs)
     return Rig(runs, clock, jobs, published, turn, node, watchdog)
 
 
 def _speaking(
-    engine: Optional[Recognizer] = None, config: SpeechEventConfig = CONFIG, paused: bool = True
+    engine: Optional[Recognizer] = None,
+    config: SpeechEventConfig = CONFIG,
+    paused: bool = True,
+    turn_heard: Optional[TurnHeard] = None,
 ) -> Rig:
     """A rig whose utterance started at 0 s with one block of 4096 samples (the Sizes engine
     unless ``engine`` is given); its first partial is due at 0.5 s. ``paused``: the speaker has
-    paused for speculation_gap."""
-    rig = _rig(engine, config)
+    paused for speculation_gap. ``turn_heard``: the turn-end model."""
+    rig = _rig(engine, config, turn_heard)
     rig.turn.paused = paused
     rig.node.add(4096)
     rig.runs.utterance_started(0.0)
@@ -278,6 +288,86 @@ def test_a_speculation_that_ends_with_the_utterance_going_on_is_a_partial_and_ma
     assert rig.published.said == [("partial", "4096 samples", ORIGIN)]
     assert rig.turn.ended_early == 1
     assert rig.runs.speculations == SpeculationCounts(started=1, used=0, wasted_seconds=0.0)
+
+
+# -- the turn-end model, heard alongside the engine ------------------------------------------------
+
+# The audio alone decides (turn_end_text false): any text is complete, and needs the model's verdict
+# unless it is one of complete_answers.
+HEARD = dataclasses.replace(CONFIG, turn_end_model="smart-turn", turn_end_text=False)
+WAIT = 10.0  # seconds a thread waits for the other at most: in a passing run it never does
+
+
+class Model:
+    """A turn-end model that says ``verdict``, once ``release`` is set (at once unless the test
+    clears it): what it was asked, and whether it answered."""
+
+    def __init__(self, verdict: bool) -> None:
+        self.verdict = verdict
+        self.asked = threading.Event()
+        self.release = threading.Event()
+        self.release.set()
+        self.answered = threading.Event()
+        self.heard: List[Tuple[int, bool]] = []
+
+    def __call__(self, audio: np.ndarray, paused: bool) -> bool:
+        self.heard.append((audio.size, paused))
+        self.asked.set()
+        self.release.wait(WAIT)
+        self.answered.set()
+        return self.verdict
+
+
+@pytest.mark.parametrize("verdict", [True, False])
+def test_the_model_hears_the_speculations_audio_while_the_engine_transcribes_it(verdict: bool) -> None:
+    model = Model(verdict)
+    rig = _speaking(config=HEARD, turn_heard=model)
+    asked_first: List[bool] = []
+    _sizes(rig).during = lambda: asked_first.append(model.asked.wait(WAIT))  # one after the other: False
+    rig.runs.speculate()
+    rig.jobs.run_all()
+    rig.runs.stop()
+    assert asked_first == [True]
+    assert model.heard == [(4096, True)]  # the audio ends at the last block: the gate's pause follows
+    assert rig.turn.speculated_on == [(4096, verdict)]
+
+
+def test_a_text_that_needs_no_verdict_does_not_wait_for_it() -> None:
+    model = Model(verdict=False)
+    model.release.clear()  # it answers only once the test lets it
+    rig = _speaking(config=dataclasses.replace(HEARD, complete_answers="4096 samples"), turn_heard=model)
+    rig.runs.speculate()
+    rig.jobs.run_all()
+    assert rig.turn.speculated_on == [(4096, True)]  # one of complete_answers, whatever the model says
+    assert model.asked.is_set() and not model.answered.is_set()
+    model.release.set()
+    rig.runs.stop()
+
+
+def test_with_a_grammar_in_force_the_model_is_not_asked() -> None:
+    model = Model(verdict=False)
+    rig = _speaking(config=HEARD, turn_heard=model)
+    rig.node.grammar = phrases_grammar(["yes", "no"], "yes|no")
+    rig.runs.speculate()
+    rig.jobs.run_all()
+    rig.runs.stop()
+    assert model.heard == []
+    assert rig.turn.speculated_on == [(4096, True)]
+
+
+def test_once_closed_the_model_is_asked_in_the_callers_thread() -> None:
+    threads: List[int] = []
+
+    def heard(audio: np.ndarray, paused: bool) -> bool:
+        threads.append(threading.get_ident())
+        return paused
+
+    alongside = HeardAlongside(heard)
+    assert alongside.ask(np.zeros(1, np.float32), True).result(WAIT) is True
+    alongside.close()
+    verdict = alongside.ask(np.zeros(1, np.float32), False)
+    assert verdict.done() and verdict.result() is False
+    assert threads[0] != threading.get_ident() and threads[1] == threading.get_ident()
 
 
 def test_a_closed_utterance_adopts_the_running_speculation_on_its_audio_and_it_concludes_it() -> None:
