@@ -32,10 +32,15 @@ from speech_event.turns.smart_turn import THREADS, HeardAlongside, SmartTurn, sm
 ENGINE = "tiny.en int8"
 
 
+def since(began: float) -> float:
+    """Milliseconds since ``began`` (time.perf_counter)."""
+    return 1000 * (time.perf_counter() - began)
+
+
 def milliseconds(call: Callable[..., object], *arguments: object) -> float:
     began = time.perf_counter()
     call(*arguments)
-    return 1000 * (time.perf_counter() - began)
+    return since(began)
 
 
 def on(threads: int) -> str:
@@ -70,35 +75,33 @@ def calls(models: Dict[int, SmartTurn], rounds: int) -> None:
 def after_engine(models: Dict[int, SmartTurn], rounds: int) -> None:
     """The engine's text, then the call on the same audio (the gate's pause after it); and the
     call alongside the text (HeardAlongside, as the node asks it): when the text is there, and
-    when both are."""
+    when both are. Each on each thread count."""
     recognizer, quantization = ENGINES[ENGINE]
     commands = [speak_festival(phrase, "slt", SAMPLE_RATE) for phrase in robot_commands()[:12]]
-    model = models[THREADS]
-    alongside = HeardAlongside(lambda audio, paused: model.complete(audio, paused))
-    with ScenarioEngines(recognizer, SpeechEventConfig(quantization=quantization)) as engines:
-        engine = engines.build()
-        for audio in commands:  # loaded and warm before anything is timed
-            engine.transcribe(audio)
-        times: Dict[str, List[float]] = {"the text alone": []}
-        times.update({f"the text, then {on(threads)}": [] for threads in models})
-        times.update({"alongside: the text": [], "alongside: both": []})
-        for _ in range(rounds):
-            for audio in commands:
-                times["the text alone"].append(milliseconds(engine.transcribe, audio))
-                for threads, each in models.items():
-
-                    def both(audio: np.ndarray = audio, each: SmartTurn = each) -> None:
-                        engine.transcribe(audio)
-                        each.complete(audio, paused=True)
-
-                    times[f"the text, then {on(threads)}"].append(milliseconds(both))
-                began = time.perf_counter()
-                verdict = alongside.ask(audio, True)
+    alongside = {threads: HeardAlongside(model.complete) for threads, model in models.items()}
+    try:
+        with ScenarioEngines(recognizer, SpeechEventConfig(quantization=quantization)) as engines:
+            engine = engines.build()
+            for audio in commands:  # loaded and warm before anything is timed
                 engine.transcribe(audio)
-                times["alongside: the text"].append(1000 * (time.perf_counter() - began))
-                verdict.result()
-                times["alongside: both"].append(1000 * (time.perf_counter() - began))
-    alongside.close()
+            times: Dict[str, List[float]] = {"the text alone": []}
+            for _ in range(rounds):
+                for audio in commands:
+                    times["the text alone"].append(milliseconds(engine.transcribe, audio))
+                    for threads, model in models.items():
+                        began = time.perf_counter()
+                        engine.transcribe(audio)
+                        model.complete(audio, paused=True)
+                        times.setdefault(f"the text, then {on(threads)}", []).append(since(began))
+                        began = time.perf_counter()
+                        verdict = alongside[threads].ask(audio, True)
+                        engine.transcribe(audio)
+                        times.setdefault(f"alongside, {on(threads)}: the text", []).append(since(began))
+                        verdict.result()
+                        times.setdefault(f"alongside, {on(threads)}: both", []).append(since(began))
+    finally:
+        for each in alongside.values():
+            each.close()
     report(f"{ENGINE}'s text and Smart Turn v3.2, {len(commands)} commands x {rounds} rounds", times)
 
 
@@ -107,7 +110,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--after-engine", action="store_true", help="the engine's text, then the call")
     arguments = parser.parse_args()
-    models = {threads: SmartTurn(threads=threads) for threads in (THREADS, 2)}
+    models = {threads: SmartTurn(threads=threads) for threads in sorted({THREADS, 1, 2})}
     if arguments.after_engine:
         after_engine(models, arguments.rounds)
     else:

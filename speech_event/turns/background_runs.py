@@ -275,7 +275,10 @@ class BackgroundRuns:
         """Whether the audio says the turn is complete too, where the rules need it (free speech, a
         complete text that is not one of complete_answers), off the lock: a function of the audio
         alone, like the text."""
-        if verdict is None or not self._speculation.needs_the_audio(speculation, outcome):
+        if verdict is None:
+            return True
+        if not self._speculation.needs_the_audio(speculation, outcome):
+            verdict.cancel()  # unheard if it has not started: the next one waits for none
             return True
         return verdict.result()
 

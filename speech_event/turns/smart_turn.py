@@ -86,10 +86,14 @@ def float_smart_turn(path: Path) -> bytes:
 
 
 # Threads a call: one, as pipecat runs it, beside the engine's own (HeardAlongside). Two took 86
-# ms a call instead of 100 alone, but right after the engine's text no less: Whisper tiny.en int8's
-# text and then the call 452 ms on two against 461 on one (median, the robot's 12 commands x 4
-# rounds, interleaved, the AVX2 EPYC's 2 cores: bench/figures/smart_turn.py --after-engine).
+# ms a call instead of 100 alone, but beside the engine they only took its cores: Whisper tiny.en
+# int8's text and the verdict alongside came 456 ms after the start on two against 379 on one
+# (median, the robot's 12 commands x 4 rounds, interleaved, the AVX2 EPYC's 2 cores:
+# bench/figures/smart_turn.py --after-engine).
 THREADS = 1
+
+
+THREAD_NAME = "speech_event_turn_end"  # HeardAlongside's
 
 
 class SmartTurn:
@@ -151,26 +155,30 @@ def turn_heard_for(config: SpeechEventConfig) -> Optional[TurnHeard]:
 class HeardAlongside:
     """What the turn-end model hears (TurnHeard), asked on a thread of its own: the background runs
     ask it as a speculation's engine starts on the same audio, and wait for the verdict only where
-    the text needs it (a complete text that is not one of complete_answers), so that the two share
-    the cores instead of taking turns. Measured (bench/figures/smart_turn.py --after-engine, the
-    robot's 12 commands, Whisper tiny.en int8, the AVX2 EPYC's 2 cores, medians): the text and the
-    verdict 385 ms, against 461 one after the other; a text that needs no verdict ("yes") 385
-    against 315 alone. The verdict is the same either way: a function of the audio. Once closed
-    (the node stopped), it is asked in the caller's thread."""
+    the text needs it (a complete text that is not one of complete_answers; elsewhere they drop it,
+    unheard if it has not started), so that the two share the cores instead of taking turns.
+    Measured (bench/figures/smart_turn.py --after-engine, the robot's 12 commands, Whisper tiny.en
+    int8, the AVX2 EPYC's 2 cores, medians): the text and the verdict 379 ms, against 483 one after
+    the other; a text that needs no verdict ("yes") 379 against 326 alone.
+
+    A thread of its own even on the fake clock: the worker's job waits for the verdict, which a
+    simulated executor would not run meanwhile; the verdict is a function of the audio, so when
+    it runs decides nothing. Once closed (the node stopped) it hears nothing more: the verdict is
+    "not complete" at once, so that no turn ends early after the node stopped."""
 
     def __init__(self, heard: TurnHeard) -> None:
         self._heard = heard
-        self._thread = ThreadPoolExecutor(max_workers=1, thread_name_prefix="speech_event_turn_end")
+        self._thread = ThreadPoolExecutor(max_workers=1, thread_name_prefix=THREAD_NAME)
 
     def ask(self, audio: np.ndarray, paused: bool) -> "Future[bool]":
         """The verdict on the turn so far, on its way."""
         try:
             return self._thread.submit(self._heard, audio, paused)
         except RuntimeError:  # closed: no thread takes it any more
-            verdict: Future[bool] = Future()
-            verdict.set_result(self._heard(audio, paused))
+            verdict: Future[bool] = Future()  # novermin: annotations in a function are not evaluated
+            verdict.set_result(False)
             return verdict
 
     def close(self) -> None:
-        """No more verdicts on the thread; one being heard ends there."""
+        """No more verdicts; those asked already are heard (or dropped) on the thread, which then ends."""
         self._thread.shutdown(wait=False)

@@ -23,7 +23,7 @@ from speech_event.pipeline.worker import Worker
 from speech_event.ports import Audio, Recognizer, Transcript
 from speech_event.turns.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.turns.partials import PartialCounts
-from speech_event.turns.smart_turn import HeardAlongside, TurnHeard
+from speech_event.turns.smart_turn import THREAD_NAME, HeardAlongside, TurnHeard
 from speech_event.turns.speculation import SpeculationCounts
 
 CONFIG = SpeechEventConfig(
@@ -310,6 +310,9 @@ class Model:
         self.answered = threading.Event()
         self.heard: List[Tuple[int, bool]] = []
 
+    def wait_until_asked(self) -> None:
+        self.asked.wait(WAIT)
+
     def __call__(self, audio: np.ndarray, paused: bool) -> bool:
         self.heard.append((audio.size, paused))
         self.asked.set()
@@ -336,12 +339,38 @@ def test_a_text_that_needs_no_verdict_does_not_wait_for_it() -> None:
     model = Model(verdict=False)
     model.release.clear()  # it answers only once the test lets it
     rig = _speaking(config=dataclasses.replace(HEARD, complete_answers="4096 samples"), turn_heard=model)
-    rig.runs.speculate()
-    rig.jobs.run_all()
-    assert rig.turn.speculated_on == [(4096, True)]  # one of complete_answers, whatever the model says
-    assert model.asked.is_set() and not model.answered.is_set()
-    model.release.set()
-    rig.runs.stop()
+    try:
+        _sizes(rig).during = model.wait_until_asked  # heard already: it cannot be dropped
+        rig.runs.speculate()
+        rig.jobs.run_all()
+        assert rig.turn.speculated_on == [(4096, True)]  # one of complete_answers, whatever it says
+        assert not model.answered.is_set()
+    finally:
+        model.release.set()
+        rig.runs.stop()
+
+
+def test_a_verdict_no_text_needs_is_dropped_unheard_when_it_has_not_started() -> None:
+    model = Model(verdict=False)
+    model.release.clear()  # the first verdict holds the thread
+    config = dataclasses.replace(HEARD, complete_answers="4096 samples,8192 samples")
+    rig = _speaking(config=config, turn_heard=model)
+    try:
+        _sizes(rig).during = model.wait_until_asked
+        rig.runs.speculate()
+        rig.jobs.run_all()
+        rig.runs.more_audio(None)  # the speaker goes on
+        rig.node.add(4096)
+        rig.runs.speculate()
+        rig.jobs.run_all()  # its verdict waits behind the first: dropped
+        assert rig.turn.speculated_on == [(4096, True), (8192, True)]
+    finally:
+        model.release.set()
+        rig.runs.stop()
+    for thread in threading.enumerate():
+        if thread.name.startswith(THREAD_NAME):
+            thread.join(WAIT)  # once closed, the thread ends when it has heard what it was asked
+    assert model.heard == [(4096, True)]
 
 
 def test_with_a_grammar_in_force_the_model_is_not_asked() -> None:
@@ -355,19 +384,14 @@ def test_with_a_grammar_in_force_the_model_is_not_asked() -> None:
     assert rig.turn.speculated_on == [(4096, True)]
 
 
-def test_once_closed_the_model_is_asked_in_the_callers_thread() -> None:
-    threads: List[int] = []
-
-    def heard(audio: np.ndarray, paused: bool) -> bool:
-        threads.append(threading.get_ident())
-        return paused
-
-    alongside = HeardAlongside(heard)
+def test_once_closed_the_model_hears_nothing_more_and_no_turn_ends_early() -> None:
+    model = Model(verdict=True)
+    alongside = HeardAlongside(model)
     assert alongside.ask(np.zeros(1, np.float32), True).result(WAIT) is True
     alongside.close()
-    verdict = alongside.ask(np.zeros(1, np.float32), False)
+    verdict = alongside.ask(np.zeros(2, np.float32), False)
     assert verdict.done() and verdict.result() is False
-    assert threads[0] != threading.get_ident() and threads[1] == threading.get_ident()
+    assert model.heard == [(1, True)]
 
 
 def test_a_closed_utterance_adopts_the_running_speculation_on_its_audio_and_it_concludes_it() -> None:
