@@ -64,11 +64,11 @@ class UnheardScores:
     """Token sequences' ``forced_log_likelihood`` after ``prompt`` with silence for audio: the
     model's prior for a text, high for what it expects when nothing is said (tiny.en writes " you"
     for silence and gives "thank you" -4.4 nats). The silence is encoded, and the prompt run over
-    it, once, at the first call that has a sequence to score (Whisper pads every piece to 30 s with
-    zeros: a second of zeros is its empty window): 0.35 to 1.1 s for tiny.en and base, once in the
-    engine's life, in the recognition that first needs it; free speech never pays it. Each sequence
-    then costs one decoder call. Those calls are not stoppable (the caller checks its run after
-    them)."""
+    it, once (Whisper pads every piece to 30 s with zeros: a second of zeros is its empty window):
+    0.35 to 1.1 s for tiny.en and base, once in the engine's life, when ``prepare`` is called (the
+    engine checks a grammar: before any command is said) or else at the first call that has a
+    sequence to score; free speech never pays it. Each sequence then costs one decoder call. Those
+    calls are not stoppable (the caller checks its run after them)."""
 
     def __init__(self, model: WhisperOnnx, prompt: Sequence[int], manifest: WhisperManifest) -> None:
         self._model = model
@@ -76,12 +76,17 @@ class UnheardScores:
         self._manifest = manifest
         self._silence: Optional[Tuple[Decoding, np.ndarray]] = None
 
-    def __call__(self, sequences: Sequence[Sequence[int]]) -> List[float]:
-        if not sequences:
-            return []
+    def prepare(self) -> Tuple[Decoding, np.ndarray]:
+        """The silence encoded and the prompt run over it, now unless done before. Two threads may
+        both do it (a grammar checked while a recognition scores): the same values either way."""
         if self._silence is None:
             silence = whisper_log_mel(np.zeros(SAMPLE_RATE, np.float32), self._manifest.mel_bands)
             decoding = self._model.decoding(silence)
             self._silence = decoding, decoding(self._prompt)
-        decoding, prompted = self._silence
+        return self._silence
+
+    def __call__(self, sequences: Sequence[Sequence[int]]) -> List[float]:
+        if not sequences:
+            return []
+        decoding, prompted = self.prepare()
         return score_phrases(decoding, self._prompt, sequences, self._manifest, prompted)

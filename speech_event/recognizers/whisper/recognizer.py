@@ -135,8 +135,11 @@ class WhisperRecognizer:
         return SAMPLE_RATE
 
     def check_grammar(self, grammar: Grammar) -> None:
-        """Every phrase must be spelt by the model's tokens in at least one form."""
+        """Every phrase must be spelt by the model's tokens in at least one form. A grammar checked is
+        about to be used (set_grammar, the grammar key): the silence its phrases' evidence is
+        scored against is encoded now, not in the recognition of the first command said."""
         self._grammars.compiled(grammar)
+        self._unheard.prepare()
 
     def use_grammar(self, grammar: Optional[Grammar]) -> None:
         self._grammars.use(grammar)

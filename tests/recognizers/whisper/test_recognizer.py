@@ -315,3 +315,24 @@ def test_silence_is_encoded_once_in_the_engines_life_and_never_for_free_speech(
     assert engine.transcribe(_speech("go lefts")).text == ""  # a near miss, 9 nats below: no candidate
     assert engine.transcribe(_speech("go left")).text == "go left"
     assert encoded == ["audio", "audio", "silence", "audio", "audio"]
+
+
+def test_a_grammar_checked_has_the_silence_encoded_before_its_first_command_is_said(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    encoded: List[str] = []
+    encode = WhisperModel.encode
+
+    def counted(model: WhisperModel, mel: np.ndarray, run: object = None) -> Dict[str, np.ndarray]:
+        encoded.append("silence" if np.ptp(mel) == 0 else "audio")
+        return encode(model, mel)
+
+    monkeypatch.setattr(WhisperModel, "encode", counted)
+    engine = WhisperRecognizer(whisper_tones_model_directory(), "english")
+    grammar = requested_grammar("stop|go left")
+    engine.check_grammar(grammar)  # as set_grammar and the grammar key do, before it is used
+    assert encoded == ["silence"]
+    engine.use_grammar(grammar)
+    assert engine.transcribe(_speech("stop")).text == "stop"  # its evidence: the silence of before
+    engine.check_grammar(requested_grammar("stop"))
+    assert encoded == ["silence", "audio"]
