@@ -115,8 +115,8 @@ def main() -> None:
     grammar = "|".join(robot_commands())
     with ScenarioEngines(name, base) as engines:
         engine = engines.build()
-        # Warm, within the grammar: the first phrase an engine accepts encodes silence once (its
-        # evidence, forced.UnheardScores), which would count against the first run.
+        # Warm, within the grammar: no run measured is the engine's first (the silence its evidence
+        # needs is encoded as each node checks the grammar, forced.UnheardScores.prepare).
         measure(engine, base, grammar, 0.0)
         print(f"{arguments.engine}, the robot's {len(robot_commands())} commands, behind the gate, real time")
         for speculating in (True, False):
