@@ -19,7 +19,7 @@ from fixtures.whisper_tones_model import whisper_tones_model_directory
 from speech_event.errors import ModelError
 from speech_event.exporters.whisper import parse_language
 from speech_event.exporters.whisper_directory import languages_of
-from speech_event.grammar import requested_grammar
+from speech_event.grammar import phrases_grammar, requested_grammar
 from speech_event.pipeline.resample import resample
 from speech_event.recognizers.onnx.mel import mel_filterbank
 from speech_event.recognizers.whisper.features import whisper_log_mel
@@ -296,17 +296,21 @@ def test_without_openai_whisper_the_export_of_a_checkpoint_says_how_to_get_it(tm
     )
 
 
-def test_silence_is_encoded_once_in_the_engines_life_and_never_for_free_speech(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    encoded: List[str] = []
+@pytest.fixture
+def encoded(monkeypatch: pytest.MonkeyPatch) -> List[str]:
+    """What the Whisper models encode from now on: "silence" or "audio", in order."""
+    seen: List[str] = []
     encode = WhisperModel.encode
 
     def counted(model: WhisperModel, mel: np.ndarray, run: object = None) -> Dict[str, np.ndarray]:
-        encoded.append("silence" if np.ptp(mel) == 0 else "audio")  # zeros: one value everywhere
+        seen.append("silence" if np.ptp(mel) == 0 else "audio")  # zeros: one value everywhere
         return encode(model, mel)
 
     monkeypatch.setattr(WhisperModel, "encode", counted)
+    return seen
+
+
+def test_silence_is_encoded_once_in_the_engines_life_and_never_for_free_speech(encoded: List[str]) -> None:
     engine = WhisperRecognizer(whisper_tones_model_directory(), "english")
     assert engine.transcribe(_speech("go left")).text == "go left"
     assert encoded == ["audio"]
@@ -318,21 +322,13 @@ def test_silence_is_encoded_once_in_the_engines_life_and_never_for_free_speech(
 
 
 def test_a_grammar_checked_has_the_silence_encoded_before_its_first_command_is_said(
-    monkeypatch: pytest.MonkeyPatch,
+    encoded: List[str],
 ) -> None:
-    encoded: List[str] = []
-    encode = WhisperModel.encode
-
-    def counted(model: WhisperModel, mel: np.ndarray, run: object = None) -> Dict[str, np.ndarray]:
-        encoded.append("silence" if np.ptp(mel) == 0 else "audio")
-        return encode(model, mel)
-
-    monkeypatch.setattr(WhisperModel, "encode", counted)
     engine = WhisperRecognizer(whisper_tones_model_directory(), "english")
-    grammar = requested_grammar("stop|go left")
+    grammar = phrases_grammar(["stop", "go left"], "stop|go left")
     engine.check_grammar(grammar)  # as set_grammar and the grammar key do, before it is used
     assert encoded == ["silence"]
     engine.use_grammar(grammar)
     assert engine.transcribe(_speech("stop")).text == "stop"  # its evidence: the silence of before
-    engine.check_grammar(requested_grammar("stop"))
+    engine.check_grammar(phrases_grammar(["stop"], "stop"))
     assert encoded == ["silence", "audio"]
