@@ -25,7 +25,7 @@ from speech_event import SIGNAL_TOPIC
 from speech_event.adapters.executors import ClockExecutor
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.adapters.memory_bus import InMemoryBus
-from speech_event.adapters.ros import RosTransport, call_service
+from speech_event.adapters.ros import RosPublisher, RosTransport, call_service
 from speech_event.config import SpeechEventConfig
 from speech_event.gui import (
     ERROR_COLOUR,
@@ -165,6 +165,10 @@ def test_on_ros_the_window_shows_the_nodes_texts_and_calls_its_services(
         window.switch_language()
         window.enabled.set(False)
         window.toggle_enabled()
+        # rospy drops what is published before a subscriber connects: the window's own, here
+        publisher = window.publisher
+        assert isinstance(publisher, RosPublisher)
+        wait_for(lambda: publisher.connections() > 0, "the window to hear its own topic")
         window.entry.insert(0, "typed on ros")
         window.publish_typed()
         wait_for(lambda: any(line.endswith("  typed on ros") for line in shown()), "the typed line back")
