@@ -118,7 +118,11 @@ def _side_by_side(tmp_path: Path, *plays: Play) -> Dict[str, List[str]]:
 
 def _same_in_every_run(runs: Dict[str, List[str]]) -> List[str]:
     first, *others = runs.values()
-    assert all(texts == first for texts in others), runs
+    # every text whole: pytest's report shortens a dict's repr, and a run that differs must show where
+    every_text = "\n".join(
+        f"{name}:\n" + "\n".join(f"  {text!r}" for text in texts) for name, texts in runs.items()
+    )
+    assert all(texts == first for texts in others), every_text
     return first
 
 
