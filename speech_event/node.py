@@ -18,6 +18,7 @@ lock; recognition and publication run on the worker without it.
 import logging
 import threading
 import time
+from contextlib import nullcontext
 from typing import Callable, Dict, Optional, Tuple
 
 from speech_event.config import SpeechEventConfig
@@ -218,7 +219,9 @@ class SpeechEventNode:
 
     def _take(self, message: object, arrival: float, stamped: bool) -> None:
         signal = validate_signal(message, self._max_samples)
-        with self._lock:  # rospy may call back from two connections at once (a restart overlapping)
+        # audio counts as arrived while it waits for the lock (a rejection is no audio)
+        arriving = nullcontext() if isinstance(signal, Rejection) else self._turns.arriving(arrival)
+        with arriving, self._lock:  # rospy may call back from two connections at once (a restart overlapping)
             if not self._in_force.enabled:  # the robot is speaking: its own voice is not to be transcribed
                 self._statistics.ignored_while_disabled()
                 return

@@ -15,7 +15,7 @@ Every method is called under the node's lock.
 
 import threading
 from dataclasses import dataclass
-from typing import Optional
+from typing import ContextManager, Optional
 
 from speech_event.config import SpeechEventConfig, end_of_speech_chosen
 from speech_event.grammar import Grammar
@@ -124,6 +124,11 @@ class TurnRules:
         return self._closed.running is job or self._background.running_for(job)
 
     # -- what the node tells ------------------------------------------------------------------------
+
+    def arriving(self, at: float) -> ContextManager[None]:
+        """While a block that arrived at ``at`` waits for the node's lock and is taken: no timer
+        hears a pause before it (turn_taking.ArrivingBlocks)."""
+        return self._pauses.arriving.arriving(at)
 
     def taken(self, when: float) -> None:
         """The callback that took a block returns at ``when`` (TurnTaking.taken). Not while a

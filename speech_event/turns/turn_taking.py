@@ -9,14 +9,17 @@ of speech (the robot's gate), where the turn rules decide whether the turn ends.
 utterance, not one per block:
 set at the first block, and when it fires early (more blocks came since) set again for the time
 after the latest block; a block that arrives once the pause is over, before its timer fired, ends
-the utterance first. Every method is called under the node's lock; the timers take it.
+the utterance first, and a block that arrived before it was over but still waits for the node's
+lock keeps the timer from firing (ArrivingBlocks). Every method is called under the node's lock;
+the timers take it.
 """
 
 import functools
 import math
 import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Callable, Iterator, List, Optional
 
 from speech_event.config import (
     SpeechEventConfig,
@@ -35,6 +38,8 @@ class RearmingTimer:
     lock: threading.Lock
     due: Callable[[], float]
     on_due: Callable[[], None]
+    # The earliest arrival of a block that waits for the lock (ArrivingBlocks.earliest), if any.
+    waiting: Callable[[], Optional[float]] = lambda: None
     _timer: Optional[Timer] = field(default=None, init=False)
     # Which setting of the timer is current: a timer thread that was already due when the timer
     # was cancelled (waiting for the lock meanwhile) must then do nothing.
@@ -78,7 +83,37 @@ class RearmingTimer:
             if self.clock.now() < self.due() - TIMER_TOLERANCE:
                 self.arm()
                 return
+            arrived = self.waiting()
+            if arrived is not None and arrived < self.due():
+                return  # a block came before it was due: taken, it sets the timer again
             self.on_due()
+
+
+class ArrivingBlocks:
+    """The blocks that have arrived and wait for the node's lock, by arrival. A timer whose thread
+    takes the lock first must not hear a pause they were not part of: under load a block waited
+    0.6 s while the worker took the blocks a decision had held, the end of speech was heard before
+    it, and a reading was split where it paused for a comma (tests/real/test_driver_under_load.py).
+    Its own lock, not the node's: a block counts as arrived before it waits for that."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._arrivals: List[float] = []
+
+    @contextmanager
+    def arriving(self, at: float) -> Iterator[None]:
+        """While the block that arrived at ``at`` waits for the node's lock and is taken."""
+        with self._lock:
+            self._arrivals.append(at)
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._arrivals.remove(at)
+
+    def earliest(self) -> Optional[float]:
+        with self._lock:
+            return min(self._arrivals, default=None)
 
 
 class TurnTaking:
@@ -116,9 +151,12 @@ class TurnTaking:
         # callback waited (for the lock, the CPU), and the next block could not come sooner.
         self._taken_at = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
-        self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end))
-        self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap)
-        self._silence = RearmingTimer(clock, lock, self._silence_due, self._silence_heard(on_silence))
+        self.arriving = ArrivingBlocks()
+        waiting = self.arriving.earliest
+        self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end), waiting)
+        self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap, waiting)
+        silence_heard = self._silence_heard(on_silence)
+        self._silence = RearmingTimer(clock, lock, self._silence_due, silence_heard, waiting)
 
     def heard(self, when: float) -> None:
         """A block arrived at ``when``: the pause starts again, and the gap."""

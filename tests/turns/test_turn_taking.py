@@ -12,7 +12,7 @@ import pytest
 from speech_event.adapters.fake_clock import FakeClock
 from speech_event.config import SpeechEventConfig
 from speech_event.ports import TIMER_TOLERANCE
-from speech_event.turns.turn_taking import RearmingTimer, TurnTaking
+from speech_event.turns.turn_taking import ArrivingBlocks, RearmingTimer, TurnTaking
 
 # -- RearmingTimer ----------------------------------------------------------------------------------
 
@@ -489,3 +489,66 @@ def test_a_callback_that_returned_late_delays_what_no_block_after_it_ends() -> N
     assert turn.gaps == [0.25 + 0.125]
     assert turn.silences == [0.25 + 0.375]
     assert turn.ends == [0.25 + 1.5]
+
+
+def test_a_block_that_waits_for_the_lock_keeps_the_timers_from_hearing_a_pause_before_it() -> None:
+    # The block at 0 was taken; the next arrived at 0.0625 and waited for the lock until 0.75 (the
+    # worker held it, taking the blocks a decision had held). The timers due at 0.125 (the gap) and
+    # 0.375 (end_of_speech) find it waiting and hear nothing; taken, it sets them again.
+    turn = Turn(END_OF_SPEECH)
+    turn.block(0.0)
+    turn.turn.taken(0.0)
+    with turn.turn.arriving.arriving(0.0625):
+        turn.clock.advance_to(0.75)
+        assert (turn.gaps, turn.silences, turn.ends) == ([], [], [])
+        turn.turn.end_pause_if_over(0.0625)
+        turn.turn.heard(0.0625)
+        turn.turn.taken(0.75)
+    turn.clock.advance_to(10.0)
+    assert turn.gaps == [0.75 + 0.125]
+    assert turn.silences == [0.75 + 0.375]
+    assert turn.ends == [0.75 + 1.5]
+
+
+def test_without_a_block_waiting_the_end_of_speech_is_heard_at_its_time() -> None:
+    # the same, with the block not yet arrived: the pause before it is heard
+    turn = Turn(END_OF_SPEECH)
+    turn.block(0.0)
+    turn.turn.taken(0.0)
+    turn.clock.advance_to(0.75)
+    assert (turn.gaps, turn.silences) == ([0.125], [0.375])
+
+
+@pytest.mark.parametrize(
+    ("arrival", "fired"),
+    [
+        pytest.param(1.9375, [], id="a_block_that_arrived_before_the_due_time_keeps_it_from_firing"),
+        pytest.param(2.0, [2.0], id="one_that_arrived_once_it_was_due_does_not"),
+    ],
+)
+def test_a_timer_due_while_a_block_waits_fires_only_if_it_was_due_before_the_block(
+    arrival: float, fired: List[float]
+) -> None:
+    clock = ManualClock()
+    heard: List[float] = []
+    timer = RearmingTimer(
+        clock, threading.Lock(), lambda: 2.0, lambda: heard.append(clock.now()), lambda: arrival
+    )
+    timer.arm()
+    clock.time = 2.0
+    clock.callbacks[0]()
+    assert heard == fired
+    assert not timer.armed
+
+
+def test_arriving_blocks_are_waiting_until_taken_earliest_first() -> None:
+    blocks = ArrivingBlocks()
+    assert blocks.earliest() is None
+    with blocks.arriving(2.0):
+        with blocks.arriving(1.0):
+            assert blocks.earliest() == 1.0
+        assert blocks.earliest() == 2.0
+    assert blocks.earliest() is None
+    with pytest.raises(RuntimeError), blocks.arriving(3.0):
+        raise RuntimeError("taking it failed")
+    assert blocks.earliest() is None
