@@ -128,7 +128,7 @@ class TurnRules:
     def arriving(self, at: float) -> ContextManager[None]:
         """While a block that arrived at ``at`` waits for the node's lock and is taken: no timer
         hears a pause before it (turn_taking.ArrivingBlocks)."""
-        return self._pauses.arriving.arriving(at)
+        return self._pauses.waiting_blocks.arriving(at)
 
     def taken(self, when: float) -> None:
         """The callback that took a block returns at ``when`` (TurnTaking.taken). Not while a

@@ -151,8 +151,8 @@ class TurnTaking:
         # callback waited (for the lock, the CPU), and the next block could not come sooner.
         self._taken_at = 0.0
         self._ends_early = False  # this utterance's speculation is a complete answer
-        self.arriving = ArrivingBlocks()
-        waiting = self.arriving.earliest
+        self.waiting_blocks = ArrivingBlocks()
+        waiting = self.waiting_blocks.earliest
         self._pause = RearmingTimer(clock, lock, self._pause_due, self._pause_ended(on_pause_end), waiting)
         self._gap = RearmingTimer(clock, lock, self._gap_due, on_gap, waiting)
         silence_heard = self._silence_heard(on_silence)

@@ -498,7 +498,7 @@ def test_a_block_that_waits_for_the_lock_keeps_the_timers_from_hearing_a_pause_b
     turn = Turn(END_OF_SPEECH)
     turn.block(0.0)
     turn.turn.taken(0.0)
-    with turn.turn.arriving.arriving(0.0625):
+    with turn.turn.waiting_blocks.arriving(0.0625):
         turn.clock.advance_to(0.75)
         assert (turn.gaps, turn.silences, turn.ends) == ([], [], [])
         turn.turn.end_pause_if_over(0.0625)
