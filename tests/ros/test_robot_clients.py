@@ -52,11 +52,12 @@ def robot_types(tmp_path_factory: pytest.TempPathFactory) -> Tuple[ModuleType, M
 
 
 @pytest.fixture(scope="module")
-def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """Our node (the fake recognizer serves both languages), checking soundDetection every second."""
+def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> Iterator[Processes]:
+    """Our node (the fake recognizer serves both languages), checking soundDetection every second;
+    its log (``node``) says when it was enabled and disabled, for a failure to show."""
     work = tmp_path_factory.mktemp("node")
     config = work / "speech_event.ini"
-    config.write_text("health_check_period 1\nspeech_pause_period 0.5\n")
+    config.write_text("health_check_period 1\nspeech_pause_period 0.5\nverbose_mode true\n")
     processes = Processes(roscore, work)
     rospy.set_param("/use_sim_time", False)  # wall time: nobody drives /clock here
     processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
@@ -65,7 +66,7 @@ def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> I
         wait_for(lambda: serves("/speechEvent/set_enabled"), "the node's set_enabled", 60)
         wait_for(lambda: serves("/speechEvent/set_language"), "the node's set_language", 60)
         wait_for(lambda: serves("/speechEvent/set_language") and _publishes(f"{ACTION}/status"), "the action")
-        yield
+        yield processes
     finally:
         processes.stop_all()
 
@@ -75,7 +76,7 @@ def _publishes(topic: str) -> bool:
     return any(name == topic and nodes for name, nodes in publishers)
 
 
-def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: None) -> None:
+def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: Processes) -> None:
     master = rosgraph.Master("/behaviourControllerProbe")
     assert master.lookupService("/speechEvent/set_language").startswith("rosrpc://")
     publishers, _, _ = master.getSystemState()
@@ -96,7 +97,7 @@ def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node:
     ],
 )
 def test_the_robots_service_types_are_served(
-    node: None, robot_types: Tuple[ModuleType, ModuleType], service: str, request_text: str, response: int
+    node: Processes, robot_types: Tuple[ModuleType, ModuleType], service: str, request_text: str, response: int
 ) -> None:
     srv, _ = robot_types
     kind = srv.speechEventSetLanguage if service == "set_language" else srv.speechEventSetStatus
@@ -117,18 +118,18 @@ def _action_client(robot_types: Tuple[ModuleType, ModuleType]) -> actionlib.Simp
 
 
 def test_the_robots_action_client_is_aborted_while_sound_detection_is_down(
-    node: None, robot_types: Tuple[ModuleType, ModuleType]
+    node: Processes, robot_types: Tuple[ModuleType, ModuleType]
 ) -> None:
     _, msg = robot_types
     client = _action_client(robot_types)
     client.send_goal(msg.recogniseSpeechGoal(wait=2.0))
     assert client.wait_for_result(rospy.Duration(30))
-    assert client.get_state() == GoalStatus.ABORTED
-    assert client.get_result().transcription == "Error: soundDetection is down"
+    outcome = (client.get_state(), client.get_result().transcription)
+    assert outcome == (GoalStatus.ABORTED, "Error: soundDetection is down"), node.last_lines("node", 40)
 
 
 def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100(
-    node: None, robot_types: Tuple[ModuleType, ModuleType]
+    node: Processes, robot_types: Tuple[ModuleType, ModuleType]
 ) -> None:
     _, msg = robot_types
     sound_detection = rospy.Publisher(SIGNAL_TOPIC, std_msgs.Float32MultiArray, queue_size=100)
@@ -137,7 +138,8 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
         client = _action_client(robot_types)
         client.send_goal(msg.recogniseSpeechGoal(wait=0.3))  # no speech: succeeds with ""
         assert client.wait_for_result(rospy.Duration(30))
-        assert (client.get_state(), client.get_result().transcription) == (GoalStatus.SUCCEEDED, "")
+        outcome = (client.get_state(), client.get_result().transcription)
+        assert outcome == (GoalStatus.SUCCEEDED, ""), node.last_lines("node", 40)
         # What the node sends is read off the feedback topic, connected before the goal is sent. The
         # client's own callback may miss the first and the last: actionlib's SimpleActionClient
         # drops a feedback that comes before send_goal has stored its goal handle (the 0, sent as
@@ -171,7 +173,7 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
         sound_detection.unregister()
 
 
-def test_diagnostics_reach_rostopic_as_a_diagnostic_array(node: None, roscore: Dict[str, str]) -> None:
+def test_diagnostics_reach_rostopic_as_a_diagnostic_array(node: Processes, roscore: Dict[str, str]) -> None:
     array = rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=30)
     (status,) = array.status
     values = {value.key: value.value for value in status.values}
