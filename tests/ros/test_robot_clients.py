@@ -97,7 +97,11 @@ def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node:
     ],
 )
 def test_the_robots_service_types_are_served(
-    node: Processes, robot_types: Tuple[ModuleType, ModuleType], service: str, request_text: str, response: int
+    node: Processes,
+    robot_types: Tuple[ModuleType, ModuleType],
+    service: str,
+    request_text: str,
+    response: int,
 ) -> None:
     srv, _ = robot_types
     kind = srv.speechEventSetLanguage if service == "set_language" else srv.speechEventSetStatus
