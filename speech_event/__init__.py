@@ -63,6 +63,7 @@ if TYPE_CHECKING:  # for type checkers (``X as X``: re-exported); at run time, s
     from speech_event.ports import Audio as Audio
     from speech_event.ports import Cancellable as Cancellable
     from speech_event.ports import Clock as Clock
+    from speech_event.ports import ClosesSentences as ClosesSentences
     from speech_event.ports import Executor as Executor
     from speech_event.ports import Grammars as Grammars
     from speech_event.ports import Incremental as Incremental
@@ -125,6 +126,7 @@ _PUBLIC: Dict[str, Tuple[str, ...]] = {
         "Audio",
         "Cancellable",
         "Clock",
+        "ClosesSentences",
         "Executor",
         "Grammars",
         "Incremental",

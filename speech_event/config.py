@@ -114,8 +114,10 @@ class SpeechEventConfig:
     # (Smart Turn v3.2 hears in the audio that the turn is complete; speech_event/turns/
     # smart_turn.py, from the pipecat-ai wheel). With smart-turn the turn ends at the end of speech
     # in free speech too (end_of_speech, 0.3 s where it is not set), when both say it is complete;
-    # one of complete_answers ends it at once.
-    turn_end_model: str = "none"
+    # one of complete_answers ends it at once. auto: smart-turn where its figures were measured
+    # (docs/benchmarks.md), in English with an engine that closes sentences (Whisper), if the model
+    # is installed; elsewhere none.
+    turn_end_model: str = "auto"
     # With turn_end_model: whether the text must be complete too (false: the audio alone decides,
     # as pipecat uses Smart Turn; any text then ends the turn where the model hears it complete).
     turn_end_text: bool = True
@@ -123,7 +125,7 @@ class SpeechEventConfig:
 
 MODEL_FAMILIES = ("conformer-transducer", "parakeet", "whisper")
 TEXT_STYLES = ("robot", "engine")
-TURN_END_MODELS = ("none", "smart-turn")
+TURN_END_MODELS = ("auto", "none", "smart-turn")
 QUANTIZATIONS = ("none", "int8")
 # Partial results more often than this would only keep the worker busy: no one reads that fast.
 SHORTEST_PARTIAL_PERIOD = 0.1
@@ -265,7 +267,7 @@ _FORMAT = KeyValueFormat(
         "complete_answers": KeyRule(text, "complete answers separated by commas, such as yes,no,yego,oya"),
         "partial_period": seconds(0.0, 60.0),
         "text_style": KeyRule(choice(*TEXT_STYLES), " or ".join(TEXT_STYLES)),
-        "turn_end_model": KeyRule(choice(*TURN_END_MODELS), " or ".join(TURN_END_MODELS)),
+        "turn_end_model": KeyRule(choice(*TURN_END_MODELS), "auto, none or smart-turn"),
         "turn_end_text": KeyRule(boolean, "true or false"),
         "end_of_speech": KeyRule(
             optional(number(float, 0.0, 60.0)),

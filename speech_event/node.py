@@ -58,7 +58,7 @@ from speech_event.ports import (
 from speech_event.topics import SIGNAL_TOPIC, SOUND_DETECTION_DOWN
 from speech_event.turns.partials import PartialCounts
 from speech_event.turns.rules import InForce, TurnRules
-from speech_event.turns.smart_turn import turn_heard_for
+from speech_event.turns.smart_turn import turn_end_for
 from speech_event.turns.speculation import SpeculationCounts
 
 _LOG = logging.getLogger("speech_event")
@@ -111,6 +111,9 @@ class SpeechEventNode:
         recognition = Recognition(config.sample_rate, screen, stopwatch)
         worker = Worker(executor, recognition, stopwatch, self._publication, self._watchdog)
         self._queue = RecognitionQueue(config.max_backlog)
+        self._turn_end = turn_end_for(config)
+        if self._turn_end is not None:
+            self._turn_end.prepare(config.language, recognizer)
         self._turns = TurnRules(
             config,
             clock,
@@ -121,7 +124,7 @@ class SpeechEventNode:
             self._queue,
             self._action,
             self._statistics,
-            turn_heard_for(config),
+            self._turn_end,
         )
         self.speculations: SpeculationCounts = self._turns.speculations  # how speculation fared
         self.partials: PartialCounts = self._turns.partials  # how partial results fared
@@ -253,6 +256,8 @@ class SpeechEventNode:
 
     def _use_engine(self, language: str, recognizer: Recognizer) -> None:
         """set_language: ``recognizer`` transcribes ``language`` from the next utterance on."""
+        if self._turn_end is not None:  # loaded here if it hears with them, not on the worker
+            self._turn_end.prepare(language, recognizer)
         with self._lock:  # utterances closed before this finish with the old engine
             self._turns.engine_or_grammar_changes()
             self._in_force.language, self._in_force.recognizer = language, recognizer

@@ -2,8 +2,8 @@
 
 Adapters implement these: the in-memory bus and the rospy transport, the fake and ROS clocks,
 the recognition engines and their fakes, the simulated and threaded workers. What only some
-engines can do is a Protocol of its own (``Stoppable``, ``Grammars``, ``Incremental``, ``Hosted``),
-checked with ``isinstance``: an engine has the ability by having its method.
+engines can do is a Protocol of its own (``Stoppable``, ``Grammars``, ``Incremental``,
+``ClosesSentences``, ``Hosted``), checked with ``isinstance``: an engine has the ability by having its method.
 """
 
 import enum
@@ -206,6 +206,17 @@ class Incremental(Protocol):
 
     def feed_partial(self, audio: Audio) -> Transcript:
         """The next samples of the utterance (at ``sample_rate``): the text of all of it so far."""
+        ...
+
+
+@runtime_checkable
+class ClosesSentences(Protocol):
+    """An engine that writes case and punctuation (Whisper): a finished sentence ends with a full
+    stop, question or exclamation mark, so its text says where a speaker may be done, and the
+    turn-end model's default (``turn_end_model auto``) listens with it in English."""
+
+    def closes_sentences(self) -> bool:
+        """True: the texts of this engine close the sentences they finish."""
         ...
 
 

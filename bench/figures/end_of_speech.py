@@ -268,8 +268,11 @@ def _figures(values: List[float]) -> str:
 
 
 def turned_off(config: SpeechEventConfig) -> SpeechEventConfig:
-    """``config`` as the node was before issue 44: end_of_speech off, speculating at 0.3 s."""
-    return dataclasses.replace(config, end_of_speech=0.0, speculation_gap=SPECULATION_GAP)
+    """``config`` as the node was before issue 44: end_of_speech off, speculating at 0.3 s, no
+    turn-end model."""
+    return dataclasses.replace(
+        config, end_of_speech=0.0, speculation_gap=SPECULATION_GAP, turn_end_model="none"
+    )
 
 
 def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, SpeechEventConfig]:
@@ -287,6 +290,7 @@ def compared(base: SpeechEventConfig, setting: float, gap: float) -> Dict[str, S
 def turn_end_rules(base: SpeechEventConfig, setting: float) -> Dict[str, SpeechEventConfig]:
     """(f)'s four rules for free speech: ``base`` (turned_off: the pause only), and the end of
     speech at ``setting`` decided by the text, by Smart Turn, and by both."""
+    base = dataclasses.replace(base, turn_end_model="none")
     text = dataclasses.replace(base, end_of_speech=setting, speculation_gap=None)
     heard = dataclasses.replace(text, turn_end_model="smart-turn")
     return {

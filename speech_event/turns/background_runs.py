@@ -104,6 +104,9 @@ class BackgroundRuns:
     # turn_end_model: whether the audio of the utterance so far says the turn is complete (free
     # speech); None: the text alone decides.
     turn_heard: Optional[TurnHeard] = None
+    # Whether turn_heard hears with the engine and language in force now (turn_end_model auto: in
+    # English with an engine that closes sentences); None: with every one.
+    hears_turn_end: Optional[Callable[[], bool]] = None
     speculations: SpeculationCounts = field(init=False)  # how speculation fared
     partials: PartialCounts = field(init=False)  # how partial results fared
 
@@ -208,6 +211,7 @@ class BackgroundRuns:
         audio = so_far.audio()[: so_far.cut]
         speculation = self._speculation.start(audio.size, so_far.recognizer, so_far.grammar)
         speculation.at_last_block = audio.size == so_far.samples
+        speculation.hears_turn_end = self._hears_turn_end(so_far.grammar)
         job = functools.partial(self._speculated, speculation, audio, so_far.origin)
         speculation.handle = self.worker.executor.submit(job)
 
@@ -262,10 +266,15 @@ class BackgroundRuns:
         elif partial is not None:
             self.worker.publication.partial(partial, origin)
 
+    def _hears_turn_end(self, grammar: Optional[Grammar]) -> bool:
+        """Whether the turn-end model hears a speculation started now (in free speech)."""
+        in_force = self.hears_turn_end is None or self.hears_turn_end()
+        return self._hearing is not None and grammar is None and in_force
+
     def _hear_alongside(self, speculation: Speculation, audio: Audio) -> "Optional[Future[bool]]":
         """In free speech with a turn-end model, its verdict on the speculation's audio, asked now,
         while the engine transcribes it (HeardAlongside); None where no verdict can count."""
-        if self._hearing is None or speculation.grammar is not None:
+        if self._hearing is None or not speculation.hears_turn_end:
             return None
         return self._hearing.ask(audio, speculation.at_last_block)
 

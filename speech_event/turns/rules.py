@@ -34,7 +34,7 @@ from speech_event.ports import Audio, Clock, Recognizer, Stoppable, engine_name
 from speech_event.turns.background_runs import BackgroundRuns, UtteranceSoFar
 from speech_event.turns.end_of_turn import EndOfTurn
 from speech_event.turns.partials import PartialCounts
-from speech_event.turns.smart_turn import TurnHeard
+from speech_event.turns.smart_turn import TurnEnd
 from speech_event.turns.speculation import SpeculationCounts, decides_at_end_of_speech
 from speech_event.turns.turn_taking import TurnTaking
 
@@ -64,10 +64,10 @@ class TurnRules:
         queue: RecognitionQueue,
         action: ListenAction,
         statistics: NodeStatistics,
-        turn_heard: Optional[TurnHeard] = None,
+        turn_end: Optional[TurnEnd] = None,
     ) -> None:
         """``queue``: where closed utterances wait for ``worker``; ``action`` and ``statistics``
-        hear of each utterance started, closed and dropped; ``turn_heard``: the turn-end model
+        hear of each utterance started, closed and dropped; ``turn_end``: the turn-end model
         (turn_end_model), None for the text alone."""
         self._config = config
         self._clock = clock
@@ -79,10 +79,11 @@ class TurnRules:
         self.utterances = 0  # closed and handed to recognition so far
         chosen = end_of_speech_chosen(config)
 
+        def hears_turn_end() -> bool:  # whether the turn-end model hears with the engine in use
+            return turn_end is not None and turn_end.hears(in_force.language, in_force.recognizer)
+
         def deciding() -> bool:  # whether the end of speech decides with the engine and grammar in use
-            return decides_at_end_of_speech(
-                in_force.recognizer, in_force.grammar, chosen, turn_heard is not None
-            )
+            return decides_at_end_of_speech(in_force.recognizer, in_force.grammar, chosen, hears_turn_end())
 
         self._end_of_speech = EndOfTurn(
             config, decides=deciding, decides_once=lambda: not isinstance(in_force.recognizer, Stoppable)
@@ -109,7 +110,8 @@ class TurnRules:
             turn=self._pauses,
             so_far=self._so_far,
             worker_idle=self._closed.idle,
-            turn_heard=turn_heard,
+            turn_heard=turn_end.heard if turn_end is not None else None,
+            hears_turn_end=hears_turn_end,
         )
         self.speculations: SpeculationCounts = self._background.speculations
         self.partials: PartialCounts = self._background.partials

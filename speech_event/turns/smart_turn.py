@@ -17,6 +17,8 @@ audio scores the same to a part in a million on every CPU (docs/decisions.md, 20
 """
 
 import importlib.util
+import logging
+import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable, Optional
@@ -27,9 +29,14 @@ from speech_event.config import SpeechEventConfig
 from speech_event.errors import ModelError
 from speech_event.exporters.dequantize import float_graph
 from speech_event.pipeline.resample import resample
+from speech_event.ports import ClosesSentences, Recognizer
 from speech_event.recognizers.whisper.features import SAMPLE_RATE, window_log_mel
 
+_LOG = logging.getLogger(__name__)
+
 MODEL_FILE = "smart-turn-v3.2-cpu.onnx"
+# Where turn_end_model auto hears: Smart Turn's languages include English, not Kinyarwanda.
+ENGLISH = "english"
 WINDOW_SAMPLES = 8 * SAMPLE_RATE
 MEL_BANDS = 80
 COMPLETE = 0.5
@@ -142,14 +149,66 @@ def with_pause(audio: np.ndarray) -> np.ndarray:
 TurnHeard = Callable[[np.ndarray, bool], bool]
 
 
-def turn_heard_for(config: SpeechEventConfig) -> Optional[TurnHeard]:
-    """What the configuration's turn_end_model hears (SmartTurn.complete); None for none.
-    ModelError when the model it names is not installed."""
+def smart_turn_installed() -> bool:
+    """Whether Smart Turn's model and onnx, which runs it, are installed (turn_end_model auto)."""
+    try:
+        smart_turn_model_path()
+    except ModelError:
+        return False
+    return importlib.util.find_spec("onnx") is not None
+
+
+class TurnEnd:
+    """The configuration's turn-end model (turn_end_model) and where it hears: smart-turn in free
+    speech with every engine that can be stopped; auto where its figures were measured, in English
+    with an engine that closes sentences (ClosesSentences: Whisper), when the model is installed.
+    The model is loaded where it will hear (``prepare``: as the node starts and at set_language),
+    never on the worker, whose first decision would wait for it; a node that never hears with it
+    never loads it."""
+
+    def __init__(self, config: SpeechEventConfig, model: Optional[Callable[[], SmartTurn]] = None) -> None:
+        """``model``: how the model is made (SmartTurn; a test's own)."""
+        self._everywhere = config.turn_end_model == "smart-turn"
+        self._rate = config.sample_rate
+        self._make = SmartTurn if model is None else model
+        self._model: Optional[SmartTurn] = None
+        self._loading = threading.Lock()
+
+    def hears(self, language: str, recognizer: Recognizer) -> bool:
+        """Whether the model hears turns with ``recognizer`` transcribing ``language``."""
+        return self._everywhere or (language == ENGLISH and isinstance(recognizer, ClosesSentences))
+
+    def prepare(self, language: str, recognizer: Recognizer) -> None:
+        """Load the model if it hears with ``recognizer`` and ``language``; ModelError if it cannot."""
+        if self.hears(language, recognizer):
+            self._loaded()
+
+    def heard(self, audio: np.ndarray, paused: bool) -> bool:
+        """TurnHeard: whether the turn so far (at the configuration's rate) is complete."""
+        return self._loaded().complete(resample(audio, self._rate, SAMPLE_RATE), paused)
+
+    def _loaded(self) -> SmartTurn:
+        with self._loading:
+            if self._model is None:
+                self._model = self._make()
+            return self._model
+
+
+def turn_end_for(config: SpeechEventConfig) -> Optional[TurnEnd]:
+    """The configuration's turn-end model; None for none, and for auto where Smart Turn is not
+    installed (the turn then ends at the pause, as with none). smart-turn not installed: the
+    ModelError of smart_turn_model_path, as the node starts."""
     if config.turn_end_model == "none":
         return None
-    model = SmartTurn()
-    rate = config.sample_rate
-    return lambda audio, paused: model.complete(resample(audio, rate, SAMPLE_RATE), paused)
+    if config.turn_end_model == "auto" and not smart_turn_installed():
+        _LOG.info(
+            "turn_end_model auto: Smart Turn is not installed (pip install --no-deps pipecat-ai==1.14.0), "
+            "so in free speech a turn ends at the pause"
+        )
+        return None
+    if config.turn_end_model == "smart-turn":
+        smart_turn_model_path()
+    return TurnEnd(config)
 
 
 class HeardAlongside:

@@ -56,6 +56,8 @@ class Speculation:
         # Whether its audio ends at the last block that came (a pause of the gate follows, in no
         # samples), not at a cut inside the samples: what a turn-end model is told.
         self.at_last_block = True
+        # Whether the turn-end model hears it (free speech, where turn_end_model hears the engine).
+        self.hears_turn_end = False
 
     def is_for(self, job: RecognitionJob) -> bool:
         """Whether a closed utterance is exactly the audio this speculation transcribes, for the
@@ -84,8 +86,8 @@ class SpeculationRules:
     def __init__(self, config: SpeechEventConfig) -> None:
         self._wanted = config.speculative_recognition
         self._answers = complete_answers(config.complete_answers)
-        # turn_end_text false: in free speech any text is complete, and the turn-end model decides
-        self._audio_alone = config.turn_end_model != "none" and not config.turn_end_text
+        # turn_end_text false: where the turn-end model hears, any text is complete and it decides
+        self._audio_alone = not config.turn_end_text
         self.counts = SpeculationCounts()
         self.current: Optional[Speculation] = None
         self._last_text: Optional[str] = None  # the text of this utterance's last speculation
@@ -164,7 +166,7 @@ class SpeculationRules:
         """Whether a speculation's text is complete by itself (no comparison with the one before); with
         the audio alone deciding in free speech (turn_end_text false), any text."""
         text = speculated_text(outcome)
-        if self._audio_alone and speculation.grammar is None:
+        if self._audio_alone and speculation.hears_turn_end:
             return bool(text.strip())
         return is_complete(text, None, speculation.grammar is not None, self._answers)
 

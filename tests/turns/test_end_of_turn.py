@@ -273,6 +273,31 @@ def _spoken_with_gaps(
     return rig
 
 
+class ClosingSentences(ToneRecognizer):
+    """The tones engine as one that closes sentences (ClosesSentences, as Whisper)."""
+
+    def closes_sentences(self) -> bool:
+        return True
+
+
+def test_left_to_its_default_free_speech_with_an_engine_that_closes_sentences_ends_at_the_end_of_speech() -> (
+    None
+):
+    # turn_end_model auto: Smart Turn hears English with such an engine (installed in this env); a
+    # complete answer ends the turn at once, in the room sound after it, long before the pause
+    assert DEFAULT.turn_end_model == "auto"
+    audio = _speech("yes", 1.0)
+    ended = _run(DEFAULT, audio, grammar="", engine=ClosingSentences)
+    assert ended.texts() == ["yes"] and ended.published[0][0] < _last_block(audio)
+    # Kinyarwanda (not among Smart Turn's languages) and turn_end_model none wait for the pause
+    for config in (
+        dataclasses.replace(DEFAULT, language="kinyarwanda"),
+        dataclasses.replace(DEFAULT, turn_end_model="none"),
+    ):
+        waited = _run(config, audio, grammar="", engine=ClosingSentences)
+        assert _timed(waited) == [(round(_last_block(audio) + DEFAULT.speech_pause_period, 6), "yes")]
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.lists(st.tuples(st.sampled_from(WORDS), st.floats(0.0, 1.2)), min_size=1, max_size=4),

@@ -15,15 +15,17 @@ from fixtures.pipecat_smart_turn import as_pipecat_pads, pipecats_features
 from fixtures.recordings import ljspeech
 from speech_event.config import SpeechEventConfig, parse_config
 from speech_event.errors import ConfigError, ModelError
+from speech_event.ports import Audio, Transcript
 from speech_event.recognizers.whisper.features import SAMPLE_RATE
 from speech_event.turns.smart_turn import (
     HEARD_PAUSE,
     WINDOW_SAMPLES,
     SmartTurn,
+    TurnEnd,
     float_smart_turn,
     smart_turn_features,
     smart_turn_model_path,
-    turn_heard_for,
+    turn_end_for,
     with_pause,
 )
 
@@ -62,12 +64,74 @@ def test_it_hears_the_readings_that_end_a_sentence_complete_and_the_others_not()
         )
 
 
-def test_the_turn_heard_for_a_configuration_resamples_its_audio() -> None:
-    assert turn_heard_for(SpeechEventConfig()) is None
-    heard = turn_heard_for(SpeechEventConfig(turn_end_model="smart-turn", sample_rate=48000))
-    assert heard is not None
+def test_the_turn_end_of_a_configuration_resamples_its_audio() -> None:
+    assert turn_end_for(SpeechEventConfig(turn_end_model="none")) is None
+    turn_end = turn_end_for(SpeechEventConfig(turn_end_model="smart-turn", sample_rate=48000))
+    assert turn_end is not None
     for recording in ljspeech():
-        assert heard(read_audio(recording.path, 48000), False) == (recording.path.stem in ENDS_A_SENTENCE)
+        heard = turn_end.heard(read_audio(recording.path, 48000), False)
+        assert heard == (recording.path.stem in ENDS_A_SENTENCE)
+
+
+class _Engine:
+    sample_rate = SAMPLE_RATE
+
+    def transcribe(self, audio: Audio) -> Transcript:
+        return Transcript("")
+
+
+class _ClosingSentences(_Engine):
+    def closes_sentences(self) -> bool:
+        return True
+
+
+class _Loads:
+    """Smart Turn, counting how often it is loaded."""
+
+    def __init__(self) -> None:
+        self.times = 0
+
+    def __call__(self) -> SmartTurn:
+        self.times += 1
+        return SmartTurn()
+
+
+def test_auto_hears_english_with_an_engine_that_closes_sentences_and_loads_the_model_only_there() -> None:
+    loads = _Loads()
+    auto = TurnEnd(SpeechEventConfig(turn_end_model="auto"), loads)
+    heard = {
+        (language, type(engine).__name__): auto.hears(language, engine)
+        for language in ("english", "kinyarwanda")
+        for engine in (_Engine(), _ClosingSentences())
+    }
+    assert heard == {
+        ("english", "_Engine"): False,
+        ("english", "_ClosingSentences"): True,
+        ("kinyarwanda", "_Engine"): False,
+        ("kinyarwanda", "_ClosingSentences"): False,
+    }
+    auto.prepare("kinyarwanda", _ClosingSentences())
+    auto.prepare("english", _Engine())
+    assert loads.times == 0
+    auto.prepare("english", _ClosingSentences())
+    auto.prepare("english", _ClosingSentences())
+    assert loads.times == 1
+    # smart-turn hears with every engine, in both languages
+    chosen = TurnEnd(SpeechEventConfig(turn_end_model="smart-turn"), loads)
+    assert chosen.hears("kinyarwanda", _Engine()) and chosen.hears("english", _Engine())
+    chosen.prepare("kinyarwanda", _Engine())
+    assert loads.times == 2
+
+
+def test_auto_is_none_where_smart_turn_or_onnx_is_not_installed(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert isinstance(turn_end_for(SpeechEventConfig()), TurnEnd)  # the default: auto, installed here
+    assert SpeechEventConfig().turn_end_model == "auto"
+    with monkeypatch.context() as patch:
+        patch.setitem(sys.modules, "onnx", None)  # find_spec then finds no onnx
+        assert turn_end_for(SpeechEventConfig()) is None
+    assert isinstance(turn_end_for(SpeechEventConfig()), TurnEnd)
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
+    assert turn_end_for(SpeechEventConfig()) is None
 
 
 def test_a_turn_cut_at_its_last_word_is_heard_with_the_pause_the_node_waited() -> None:
@@ -126,13 +190,14 @@ def test_without_onnx_the_message_says_what_to_install(monkeypatch: pytest.Monke
 def test_without_pipecat_the_message_says_how_to_install_the_model(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
     with pytest.raises(ModelError) as error:
-        turn_heard_for(SpeechEventConfig(turn_end_model="smart-turn"))
+        turn_end_for(SpeechEventConfig(turn_end_model="smart-turn"))
     assert "pip install --no-deps pipecat-ai" in str(error.value)
     assert "smart-turn-v3.2-cpu.onnx" in str(error.value)
 
 
-def test_the_key_takes_none_or_smart_turn_and_says_so() -> None:
-    assert parse_config("turn_end_model smart-turn").turn_end_model == "smart-turn"
+def test_the_key_takes_auto_none_or_smart_turn_and_says_so() -> None:
+    for value in ("auto", "none", "smart-turn"):
+        assert parse_config(f"turn_end_model {value}").turn_end_model == value
     with pytest.raises(ConfigError) as error:
         parse_config("turn_end_model silero", "f.ini")
-    assert str(error.value).endswith("none or smart-turn")
+    assert str(error.value).endswith("auto, none or smart-turn")

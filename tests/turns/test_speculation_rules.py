@@ -492,19 +492,26 @@ def test_with_the_audio_alone_deciding_any_text_of_free_speech_is_complete_for_t
 ) -> None:
     outcome = RecognitionOutcome(Transcript(text, None))
     heard = dataclasses.replace(CONFIG, turn_end_model="smart-turn")
-    for config, complete in (
-        (CONFIG, by_text),
-        (heard, by_text),
-        (dataclasses.replace(heard, turn_end_text=False), by_audio_alone),
+    audio_alone = dataclasses.replace(heard, turn_end_text=False)
+    # (configuration, whether the turn-end model hears the speculation, complete): it hears only in
+    # free speech (BackgroundRuns), and with auto only where it hears the engine and language in force
+    for config, hears, complete in (
+        (CONFIG, False, by_text),
+        (heard, grammar is None, by_text),
+        (audio_alone, grammar is None, by_audio_alone),
+        (audio_alone, False, by_text),
     ):
         speculation = Speculation(16000, StoppableRecognizer(), grammar)
+        speculation.hears_turn_end = hears
         assert SpeculationRules(config).text_complete(speculation, outcome) == complete
         rules = SpeculationRules(config)
         started = rules.start(16000, StoppableRecognizer(), grammar)
+        started.hears_turn_end = hears
         rules.finished(started, outcome, heard_complete=False)
         assert not started.complete  # the audio says the turn goes on
         rules = SpeculationRules(config)
         started = rules.start(16000, StoppableRecognizer(), grammar)
+        started.hears_turn_end = hears
         rules.finished(started, outcome, heard_complete=True)
         assert started.complete == complete
 

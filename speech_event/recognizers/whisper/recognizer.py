@@ -268,3 +268,6 @@ class WhisperRecognizer:
     def stop(self) -> None:
         """Stop the transcribe running now: its next onnxruntime call raises."""
         self._runs.stop()
+
+    def closes_sentences(self) -> bool:
+        return True
