@@ -226,8 +226,9 @@ def decides_at_end_of_speech(
     turn would end at the pause anyway; its free decoding of a command and a second of babble after
     it takes 2.1 s, and a decision at each end heard in it kept the text up to 15 s late
     (bench/figures/end_of_speech.py).
-    ``hears_turn_end`` (turn_end_model set): in free speech an engine that can be stopped decides
-    too, the turn ending only where the audio says it is complete as well (SpeculationRules)."""
+    ``hears_turn_end`` (the turn-end model hears with the engine in force: TurnEnd.hears): in
+    free speech an engine that can be stopped decides too, the turn ending only where the audio
+    says it is complete as well (SpeculationRules)."""
     stoppable = isinstance(recognizer, Stoppable)
     if grammar is not None:
         return stoppable or chosen
