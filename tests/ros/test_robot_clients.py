@@ -9,8 +9,9 @@ types with the same build step under another package name and talk to the node t
 import importlib
 import subprocess
 import sys
+import xmlrpc.client
 from types import ModuleType
-from typing import Dict, Iterator, List, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Tuple
 
 import actionlib
 import pytest
@@ -52,21 +53,39 @@ def robot_types(tmp_path_factory: pytest.TempPathFactory) -> Tuple[ModuleType, M
 
 
 @pytest.fixture(scope="module")
-def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> Iterator[Processes]:
+def node(roscore: Dict[str, str], tmp_path_factory: pytest.TempPathFactory) -> Iterator[Callable[[], str]]:
     """Our node (the fake recognizer serves both languages), checking soundDetection every second;
-    its log (``node``) says when it was enabled and disabled, for a failure to show."""
+    what it did, for a failure to show: whether it still runs, which process the master knows as
+    /speechEvent, and its log, which says when it was enabled and disabled (unbuffered: read while
+    it runs)."""
     work = tmp_path_factory.mktemp("node")
     config = work / "speech_event.ini"
     config.write_text("health_check_period 1\nspeech_pause_period 0.5\nverbose_mode true\n")
-    processes = Processes(roscore, work)
+    processes = Processes({**roscore, "PYTHONUNBUFFERED": "1"}, work)
     rospy.set_param("/use_sim_time", False)  # wall time: nobody drives /clock here
-    processes.start("node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"])
+    ours = processes.start(
+        "node", [sys.executable, str(APPLICATION), "-c", str(config), "--recognizer", "fake"]
+    )
+
+    def what_it_did() -> str:
+        try:
+            uri = rosgraph.Master("/probe").lookupNode("/speechEvent")
+            answer: Any = xmlrpc.client.ServerProxy(uri).getPid("/probe")  # [code, message, pid]
+            known = f"{uri}, pid {answer[2]}"
+        except Exception as problem:  # the master or that node does not answer
+            known = f"unknown ({problem})"
+        running = "runs" if ours.poll() is None else f"exited with {ours.returncode}"
+        return (
+            f"our node, pid {ours.pid}, {running}; the master's /speechEvent: {known}\n"
+            + processes.last_lines("node", 40)
+        )
+
     try:
         # up: its services, and the action it registers last
         wait_for(lambda: serves("/speechEvent/set_enabled"), "the node's set_enabled", 60)
         wait_for(lambda: serves("/speechEvent/set_language"), "the node's set_language", 60)
         wait_for(lambda: serves("/speechEvent/set_language") and _publishes(f"{ACTION}/status"), "the action")
-        yield processes
+        yield what_it_did
     finally:
         processes.stop_all()
 
@@ -76,7 +95,7 @@ def _publishes(topic: str) -> bool:
     return any(name == topic and nodes for name, nodes in publishers)
 
 
-def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: Processes) -> None:
+def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node: Callable[[], str]) -> None:
     master = rosgraph.Master("/behaviourControllerProbe")
     assert master.lookupService("/speechEvent/set_language").startswith("rosrpc://")
     publishers, _, _ = master.getSystemState()
@@ -97,7 +116,7 @@ def test_the_behaviour_controllers_start_up_checks_find_what_they_look_for(node:
     ],
 )
 def test_the_robots_service_types_are_served(
-    node: Processes,
+    node: Callable[[], str],
     robot_types: Tuple[ModuleType, ModuleType],
     service: str,
     request_text: str,
@@ -122,18 +141,18 @@ def _action_client(robot_types: Tuple[ModuleType, ModuleType]) -> actionlib.Simp
 
 
 def test_the_robots_action_client_is_aborted_while_sound_detection_is_down(
-    node: Processes, robot_types: Tuple[ModuleType, ModuleType]
+    node: Callable[[], str], robot_types: Tuple[ModuleType, ModuleType]
 ) -> None:
     _, msg = robot_types
     client = _action_client(robot_types)
     client.send_goal(msg.recogniseSpeechGoal(wait=2.0))
     assert client.wait_for_result(rospy.Duration(30))
     outcome = (client.get_state(), client.get_result().transcription)
-    assert outcome == (GoalStatus.ABORTED, "Error: soundDetection is down"), node.last_lines("node", 40)
+    assert outcome == (GoalStatus.ABORTED, "Error: soundDetection is down"), node()
 
 
 def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100(
-    node: Processes, robot_types: Tuple[ModuleType, ModuleType]
+    node: Callable[[], str], robot_types: Tuple[ModuleType, ModuleType]
 ) -> None:
     _, msg = robot_types
     sound_detection = rospy.Publisher(SIGNAL_TOPIC, std_msgs.Float32MultiArray, queue_size=100)
@@ -143,7 +162,7 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
         client.send_goal(msg.recogniseSpeechGoal(wait=0.3))  # no speech: succeeds with ""
         assert client.wait_for_result(rospy.Duration(30))
         outcome = (client.get_state(), client.get_result().transcription)
-        assert outcome == (GoalStatus.SUCCEEDED, ""), node.last_lines("node", 40)
+        assert outcome == (GoalStatus.SUCCEEDED, ""), node()
         # What the node sends is read off the feedback topic, connected before the goal is sent. The
         # client's own callback may miss the first and the last: actionlib's SimpleActionClient
         # drops a feedback that comes before send_goal has stored its goal handle (the 0, sent as
@@ -177,7 +196,9 @@ def test_the_robots_action_client_gets_the_next_utterance_and_feedback_up_to_100
         sound_detection.unregister()
 
 
-def test_diagnostics_reach_rostopic_as_a_diagnostic_array(node: Processes, roscore: Dict[str, str]) -> None:
+def test_diagnostics_reach_rostopic_as_a_diagnostic_array(
+    node: Callable[[], str], roscore: Dict[str, str]
+) -> None:
     array = rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=30)
     (status,) = array.status
     values = {value.key: value.value for value in status.values}
